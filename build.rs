@@ -1,0 +1,24 @@
+//! Compiles every shader in `glsl/` to SPIR-V (see tools/hfgi-glsl) and embeds it.
+fn main() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+    println!("cargo:rerun-if-changed={}", root.display());
+    let out = std::path::PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR")).join("shaders.rs");
+    let shaders = match hfgi_glsl::compile_tree(&root) {
+        Ok(s) => s,
+        Err(e) => {
+            // Cargo prints this; the message starts with file:line from glslang.
+            eprintln!("{e}");
+            for line in e.lines() {
+                println!("cargo:warning={line}");
+            }
+            std::process::exit(1);
+        }
+    };
+    for s in &shaders {
+        println!("cargo:rerun-if-changed={}", s.source.display());
+    }
+    if let Err(e) = hfgi_glsl::write_module(&shaders, &out) {
+        eprintln!("{e}");
+        std::process::exit(1);
+    }
+}

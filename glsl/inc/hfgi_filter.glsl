@@ -1,0 +1,71 @@
+// hfgi — software bilinear and cubic B-spline sampling of pyramid levels stored in a float
+// buffer. The includer declares, before including this file:
+//     layout(std430, binding = N) readonly buffer ... { float hfgi_levels[]; };
+// Coordinates are in the level's texel units with texel centres at integers.
+#ifndef HFGI_FILTER_GLSL
+#define HFGI_FILTER_GLSL
+#include "hfgi_shared.glsl"
+
+int hfgi_address(int p, int n, bool wrap) {
+    if (wrap) {
+        int m = p % n;
+        return m < 0 ? m + n : m;
+    }
+    return clamp(p, 0, n - 1);
+}
+
+float hfgi_fetch(hfgi_Level l, ivec2 p, bool wrap) {
+    int x = hfgi_address(p.x, int(l.width), wrap);
+    int y = hfgi_address(p.y, int(l.height), wrap);
+    return hfgi_levels[l.offset + uint(y) * l.width + uint(x)];
+}
+
+// Bilinear interpolation between texels base and base+1 with fractions f in [0, 1].
+// Computed in software (exact f32 weights) rather than by the sampler, whose sub-texel
+// precision (often 8 bits) would cost ~1e-3 of the local height difference.
+float hfgi_bilinear(hfgi_Level l, ivec2 base, vec2 f, bool wrap) {
+    float a = hfgi_fetch(l, base, wrap);
+    float b = hfgi_fetch(l, base + ivec2(1, 0), wrap);
+    float c = hfgi_fetch(l, base + ivec2(0, 1), wrap);
+    float d = hfgi_fetch(l, base + ivec2(1, 1), wrap);
+    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+}
+
+float hfgi_bilinear_at(hfgi_Level l, vec2 pos, bool wrap) {
+    vec2 fl = floor(pos);
+    return hfgi_bilinear(l, ivec2(fl), pos - fl, wrap);
+}
+
+// Uniform cubic B-spline (SN08 eq. 4.9–4.12) at pos, as four bilinear taps
+// (Sigg & Hadwiger 2005, "Fast third-order texture filtering"): per axis the weights
+// w0..w3 of texels i-1..i+2 collapse into g0 = w0+w1 at i-1 + w1/g0 and g1 = w2+w3 at
+// i+1 + w3/g1. Integer bases and fractions are kept apart for precision.
+float hfgi_bspline_at(hfgi_Level l, vec2 pos, bool wrap) {
+    vec2 fl = floor(pos);
+    vec2 t = pos - fl;
+    vec2 s = 1.0 - t;
+    vec2 t2 = t * t;
+    vec2 t3 = t2 * t;
+    vec2 w0 = s * s * s / 6.0;
+    vec2 w1 = (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0;
+    vec2 w3 = t3 / 6.0;
+    vec2 w2 = 1.0 - w0 - w1 - w3;
+    vec2 g0 = w0 + w1;
+    vec2 g1 = w2 + w3;
+    vec2 f0 = w1 / g0; // fraction from texel i-1 toward i
+    vec2 f1 = w3 / g1; // fraction from texel i+1 toward i+2
+    ivec2 i = ivec2(fl);
+    float t00 = hfgi_bilinear(l, i + ivec2(-1, -1), vec2(f0.x, f0.y), wrap);
+    float t10 = hfgi_bilinear(l, i + ivec2(1, -1), vec2(f1.x, f0.y), wrap);
+    float t01 = hfgi_bilinear(l, i + ivec2(-1, 1), vec2(f0.x, f1.y), wrap);
+    float t11 = hfgi_bilinear(l, i + ivec2(1, 1), vec2(f1.x, f1.y), wrap);
+    return g0.y * (g0.x * t00 + g1.x * t10) + g1.y * (g0.x * t01 + g1.x * t11);
+}
+
+// Position in level l's texel units of a point given in texel units of a grid `from`
+// cells wide (texel-centre aligned: the domain edges coincide).
+vec2 hfgi_rescale(vec2 p, vec2 from, hfgi_Level l) {
+    return (p + 0.5) * vec2(float(l.width), float(l.height)) / from - 0.5;
+}
+
+#endif

@@ -1,0 +1,6 @@
+//! The GI effect as passes. Each pass is a file named after its stage, records into a
+//! caller's command buffer through [`crate::vk::Recorder`] and has a CPU twin in
+//! [`crate::reference`].
+
+pub mod pyramid;
+pub mod shared;

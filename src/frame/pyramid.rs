@@ -1,0 +1,350 @@
+//! Stage `pyramid`: the multi-resolution height pyramid (NS09 §5.2 and §9; SN08).
+//!
+//! Level 0 is the input field. Level `i` has `round(N · 2^(−i/k_v))` samples per axis and is
+//! level `i−1` bilinearly decimated (texel-centre aligned). Levels: `n_v = ⌊k_v·log2(max(Nx,Ny))⌋ + 1`,
+//! so the coarsest level has one or two samples. Two storage modes:
+//!
+//! - [`PyramidMode::Stack`] (the paper's): every level is resampled back to the working
+//!   resolution with a cubic B-spline (Sigg & Hadwiger's bilinear-tap form) into a stack of
+//!   `n_v` full-resolution planes; later passes sample it bilinearly.
+//! - [`PyramidMode::Pyramid`] (the paper's future work, §10): only the decimated levels are
+//!   kept, and later passes evaluate the cubic B-spline on the fly.
+//!
+//! Buffers, not images: levels are packed in one storage buffer (`f32`, row-major, offsets in
+//! [`PyramidLayout`]); the stack is a second buffer of `n_v` planes. After
+//! [`HeightPyramid::record`] a compute→compute barrier has been recorded, so later compute
+//! passes may read both; for transfer reads add [`crate::vk::barrier::compute_to_transfer`].
+//! Before it, the caller's writes to level 0 (by transfer or compute) are made visible by a
+//! barrier the pass records itself.
+
+use std::str::FromStr;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::shared::{GpuLevel, PyramidPush};
+use crate::error::{Error, Result};
+use crate::scene::HeightField;
+use crate::shaders;
+use crate::vk::pipeline::{groups, Bind};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+
+/// Stage names (timestamp scopes and debug labels).
+pub const STAGE_DECIMATE: &str = "pyramid.decimate";
+pub const STAGE_SYNTHESIZE: &str = "pyramid.synthesize";
+
+/// How the pyramid is stored and sampled (scene key `gi.pyramid`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PyramidMode {
+    /// Every level B-spline-synthesized to the working resolution (NS09 §9).
+    #[default]
+    Stack,
+    /// Decimated levels only, B-spline filtered on the fly (NS09 §10).
+    Pyramid,
+}
+
+impl FromStr for PyramidMode {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "stack" => Ok(Self::Stack),
+            "pyramid" => Ok(Self::Pyramid),
+            _ => Err(Error::param("pyramid mode", s, "`stack` or `pyramid`")),
+        }
+    }
+}
+
+impl std::fmt::Display for PyramidMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Stack => "stack",
+            Self::Pyramid => "pyramid",
+        })
+    }
+}
+
+/// Sizes and buffer offsets of every level.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PyramidLayout {
+    /// Level step `k_v`: levels per halving of the resolution.
+    pub k_v: u32,
+    /// Level `i`: width, height and offset (in floats) in the levels buffer.
+    pub levels: Vec<GpuLevel>,
+    /// Total floats of all levels.
+    pub total: u64,
+}
+
+impl PyramidLayout {
+    /// The layout for an `width × height` field with level step `k_v ≥ 1`.
+    pub fn new(width: usize, height: usize, k_v: u32) -> Result<Self> {
+        if k_v == 0 || k_v > 64 {
+            return Err(Error::param("level step k_v", k_v, "an integer in 1..=64"));
+        }
+        if width < 2 || height < 2 {
+            return Err(Error::param("pyramid size", format!("{width}×{height}"), "at least 2×2"));
+        }
+        let n = width.max(height) as f64;
+        let n_v = (k_v as f64 * n.log2() + 1e-9).floor() as usize + 1;
+        let mut levels = Vec::with_capacity(n_v);
+        let mut offset = 0u64;
+        for i in 0..n_v {
+            let f = 2f64.powf(-(i as f64) / k_v as f64);
+            let (w, h) = if i == 0 {
+                (width, height)
+            } else {
+                (((width as f64 * f).round() as usize).max(1), ((height as f64 * f).round() as usize).max(1))
+            };
+            if offset > u32::MAX as u64 {
+                return Err(Error::param("pyramid size", format!("{width}×{height}"), "fewer than 2^32 samples in all levels"));
+            }
+            levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, pad: 0 });
+            offset += (w * h) as u64;
+        }
+        Ok(Self { k_v, levels, total: offset })
+    }
+
+    /// Number of levels `n_v`.
+    pub fn count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Step `τ_i = 2^(−(n_v−1−i)/k_v)` of eq. 14, in units of the domain.
+    pub fn tau(&self, i: usize) -> f64 {
+        2f64.powf(-((self.count() - 1 - i) as f64) / self.k_v as f64)
+    }
+}
+
+/// The height pyramid pass and its buffers.
+pub struct HeightPyramid {
+    layout: PyramidLayout,
+    mode: PyramidMode,
+    wrap: bool,
+    levels: Buffer,
+    table: Buffer,
+    stack: Option<Buffer>,
+    decimate: ComputePipeline,
+    synthesize: Option<ComputePipeline>,
+    decimate_set: vk::DescriptorSet,
+    synthesize_set: vk::DescriptorSet,
+}
+
+impl HeightPyramid {
+    /// Allocates the buffers and pipelines for a `width × height` field.
+    pub fn new(ctx: &Context, width: usize, height: usize, k_v: u32, mode: PyramidMode, wrap: bool) -> Result<Self> {
+        let layout = PyramidLayout::new(width, height, k_v)?;
+        let max = ctx.info().max_image_dimension_2d as usize;
+        if width > max || height > max {
+            return Err(Error::FieldSize { source_name: "pyramid".into(), width, height, max: max as u32 });
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let plane = (width * height) as u64;
+        let stack_floats = plane * layout.count() as u64;
+        if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
+            return Err(Error::param(
+                "gi.pyramid",
+                "stack",
+                format!("`pyramid` for a {width}×{height} field (the stack would hold {stack_floats} floats, more than 2^32)"),
+            ));
+        }
+        let (mut levels, mut table, mut stack) = (None, None, None);
+        let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
+        let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
+        let made = (|| -> Result<()> {
+            let lv = levels.insert(Buffer::new(ctx, "hfgi.pyramid.levels", layout.total * 4, storage, MemoryLocation::GpuOnly)?);
+            let tb = table.insert(Buffer::new(ctx, "hfgi.pyramid.table", (layout.count() * 16) as u64, storage, MemoryLocation::GpuOnly)?);
+            memory::upload(ctx, tb, 0, bytemuck::cast_slice(&layout.levels))?;
+            let d = decimate.insert(ComputePipeline::new(ctx, &shaders::PYRAMID_DECIMATE_COMP, &[DescriptorKind::StorageBuffer; 2], 16, &[], 1)?);
+            sets.0 = d.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb)])?;
+            if mode == PyramidMode::Stack {
+                let st = stack.insert(Buffer::new(ctx, "hfgi.pyramid.stack", stack_floats * 4, storage, MemoryLocation::GpuOnly)?);
+                let p = synthesize.insert(ComputePipeline::new(ctx, &shaders::PYRAMID_SYNTHESIZE_COMP, &[DescriptorKind::StorageBuffer; 3], 16, &[], 1)?);
+                sets.1 = p.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb), Bind::Buffer(st)])?;
+            }
+            Ok(())
+        })();
+        match (made, levels, table, decimate) {
+            (Ok(()), Some(levels), Some(table), Some(decimate)) => Ok(Self {
+                layout,
+                mode,
+                wrap,
+                levels,
+                table,
+                stack,
+                decimate,
+                synthesize,
+                decimate_set: sets.0,
+                synthesize_set: sets.1,
+            }),
+            (made, levels, table, decimate) => {
+                for b in [levels, table, stack].into_iter().flatten() {
+                    b.destroy(ctx);
+                }
+                for mut p in [decimate, synthesize].into_iter().flatten() {
+                    p.destroy(ctx);
+                }
+                Err(made.err().unwrap_or_else(|| Error::Unsupported("pyramid construction".into())))
+            }
+        }
+    }
+
+    /// Copies `field` into level 0 (through a staging buffer; waits). Engines that produce
+    /// heights on the GPU instead write `f32`s to [`HeightPyramid::levels_buffer`] at offset 0.
+    pub fn upload(&self, ctx: &Context, field: &HeightField) -> Result<()> {
+        let l0 = self.layout.levels[0];
+        if field.width() != l0.width as usize || field.height() != l0.height as usize {
+            return Err(Error::param(
+                "height field size",
+                format!("{}×{}", field.width(), field.height()),
+                format!("{}×{} (the size this pyramid was created for)", l0.width, l0.height),
+            ));
+        }
+        memory::upload_f32(ctx, &self.levels, 0, field.data())
+    }
+
+    /// Records the decimation (and, in stack mode, the synthesis) into `rec`'s command buffer.
+    pub fn record(&self, rec: &mut Recorder) {
+        let wrap = self.wrap as u32;
+        let layout = &self.layout;
+        rec.scope(STAGE_DECIMATE, |ctx, cmd| {
+            // Level 0 may have been written by a copy or by a host compute pass.
+            barrier::transfer_to_compute(ctx, cmd);
+            barrier::compute_to_compute(ctx, cmd);
+            for i in 1..layout.count() {
+                let l = layout.levels[i];
+                let push = PyramidPush { level: i as u32, wrap, out_width: l.width, out_height: l.height };
+                self.decimate.dispatch(
+                    ctx,
+                    cmd,
+                    self.decimate_set,
+                    bytemuck::bytes_of(&push),
+                    [groups(l.width, 8), groups(l.height, 8), 1],
+                );
+                barrier::compute_to_compute(ctx, cmd);
+            }
+        });
+        if let Some(p) = &self.synthesize {
+            rec.scope(STAGE_SYNTHESIZE, |ctx, cmd| {
+                let l0 = layout.levels[0];
+                let push = PyramidPush { level: 0, wrap, out_width: l0.width, out_height: l0.height };
+                p.dispatch(
+                    ctx,
+                    cmd,
+                    self.synthesize_set,
+                    bytemuck::bytes_of(&push),
+                    [groups(l0.width, 8), groups(l0.height, 8), layout.count() as u32],
+                );
+                barrier::compute_to_compute(ctx, cmd);
+            });
+        }
+    }
+
+    pub fn layout(&self) -> &PyramidLayout {
+        &self.layout
+    }
+    pub fn mode(&self) -> PyramidMode {
+        self.mode
+    }
+    pub fn wrap(&self) -> bool {
+        self.wrap
+    }
+    /// All decimated levels, packed (see [`PyramidLayout`]). Level 0 is the input.
+    pub fn levels_buffer(&self) -> &Buffer {
+        &self.levels
+    }
+    /// The level table (`hfgi_Level[n_v]`), for passes that sample the pyramid.
+    pub fn table_buffer(&self) -> &Buffer {
+        &self.table
+    }
+    /// The synthesized stack (`n_v` planes at the working resolution), in stack mode.
+    pub fn stack_buffer(&self) -> Option<&Buffer> {
+        self.stack.as_ref()
+    }
+
+    /// Bytes of GPU memory held by this mode's buffers.
+    pub fn memory_bytes(&self) -> u64 {
+        self.levels.size + self.table.size + self.stack.as_ref().map_or(0, |s| s.size)
+    }
+
+    /// Reads level `i` back (waits). For tests and pictures.
+    pub fn read_level(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
+        let l = *self.layout.levels.get(i).ok_or_else(|| Error::param("level", i, format!("< {}", self.layout.count())))?;
+        memory::download_f32(ctx, &self.levels, l.offset as u64, (l.width * l.height) as u64)
+    }
+
+    /// Reads stack plane `i` back (waits). Stack mode only.
+    pub fn read_stack(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
+        let s = self.stack.as_ref().ok_or_else(|| Error::param("read_stack", "pyramid mode", "stack mode"))?;
+        if i >= self.layout.count() {
+            return Err(Error::param("level", i, format!("< {}", self.layout.count())));
+        }
+        let l0 = self.layout.levels[0];
+        let plane = (l0.width * l0.height) as u64;
+        memory::download_f32(ctx, s, i as u64 * plane, plane)
+    }
+
+    /// Samples the pyramid at `(level, x, y)` queries (x, y in working-resolution texels) on
+    /// the GPU exactly as later passes do: bilinear on the stack, or B-spline on the fly.
+    pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
+        let q: Vec<[f32; 4]> = queries.iter().map(|q| [q[0], q[1], q[2], 0.0]).collect();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
+        let qb = Buffer::new(ctx, "hfgi.pyramid.probe.queries", (q.len() * 16) as u64, usage, MemoryLocation::GpuOnly)?;
+        let rb = match Buffer::new(ctx, "hfgi.pyramid.probe.result", (q.len() * 4) as u64, usage, MemoryLocation::GpuOnly) {
+            Ok(b) => b,
+            Err(e) => {
+                qb.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let mut pipe: Option<ComputePipeline> = None;
+        let r = (|| -> Result<Vec<f32>> {
+            memory::upload(ctx, &qb, 0, bytemuck::cast_slice(&q))?;
+            let p = pipe.insert(ComputePipeline::new(
+                ctx,
+                &shaders::PYRAMID_PROBE_COMP,
+                &[DescriptorKind::StorageBuffer; 5],
+                16,
+                &[],
+                1,
+            )?);
+            let stack = self.stack.as_ref().unwrap_or(&self.levels);
+            let set = p.allocate_set(
+                ctx,
+                &[Bind::Buffer(&self.levels), Bind::Buffer(&self.table), Bind::Buffer(stack), Bind::Buffer(&qb), Bind::Buffer(&rb)],
+            )?;
+            let l0 = self.layout.levels[0];
+            let push = PyramidPush {
+                level: (self.mode == PyramidMode::Pyramid) as u32,
+                wrap: self.wrap as u32,
+                out_width: l0.width,
+                out_height: l0.height,
+            };
+            ctx.submit_and_wait(|cmd| {
+                barrier::compute_to_compute(ctx, cmd);
+                p.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), [groups(q.len() as u32, 64), 1, 1]);
+                Ok(())
+            })?;
+            memory::download_f32(ctx, &rb, 0, q.len() as u64)
+        })();
+        if let Some(mut p) = pipe {
+            p.destroy(ctx);
+        }
+        qb.destroy(ctx);
+        rb.destroy(ctx);
+        r
+    }
+
+    /// Frees every buffer and pipeline.
+    pub fn destroy(mut self, ctx: &Context) {
+        self.decimate.destroy(ctx);
+        if let Some(p) = self.synthesize.as_mut() {
+            p.destroy(ctx);
+        }
+        self.levels.destroy(ctx);
+        self.table.destroy(ctx);
+        if let Some(s) = self.stack {
+            s.destroy(ctx);
+        }
+    }
+}

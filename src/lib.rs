@@ -1,0 +1,22 @@
+//! # hfgi — global illumination on dynamic height fields, Vulkan-native
+//!
+//! An implementation of Nowrouzezahrai & Snyder, "Fast Global Illumination on Dynamic Height
+//! Fields" (EGSR 2009). Layers, each depending only on those above it:
+//!
+//! - [`vk`]: Vulkan plumbing (context, memory, pipelines, barriers, stage timer).
+//! - [`frame`]: the GI effect as named passes that record into a caller's command buffer.
+//! - [`math`] and [`reference`]: f64 reference math and CPU twins of every GPU stage.
+//! - [`scene`] and [`io`]: height fields (generators, loaders) and image output.
+//!
+//! Conventions (coordinates, SH basis, exported values) are in `docs/conventions.md`.
+
+pub mod error;
+pub mod frame;
+pub mod io;
+pub mod math;
+pub mod reference;
+pub mod scene;
+pub mod shaders;
+pub mod vk;
+
+pub use error::{Error, Result};

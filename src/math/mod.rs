@@ -1,0 +1,2 @@
+//! f64 reference math.
+pub mod bspline;

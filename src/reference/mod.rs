@@ -1,0 +1,3 @@
+//! CPU (f64) twins of the GPU stages, same algorithm and parameters, used by the tests.
+
+pub mod pyramid;

@@ -1,0 +1,118 @@
+//! CPU twin of [`crate::frame::pyramid`] in f64: the same decimation and the same cubic
+//! B-spline, written as a direct 4×4 weighted sum (not as bilinear taps), so the GPU's
+//! Sigg–Hadwiger form is checked against an independent formulation of the same filter.
+
+use crate::error::Result;
+use crate::frame::pyramid::PyramidLayout;
+use crate::math::bspline;
+use crate::scene::HeightField;
+
+/// All levels (and optionally the synthesized stack) in f64.
+pub struct CpuPyramid {
+    pub layout: PyramidLayout,
+    pub wrap: bool,
+    /// `levels[i]`: level `i`, row-major.
+    pub levels: Vec<Vec<f64>>,
+    /// `stack[i]`: level `i` B-spline-resampled to the level-0 resolution.
+    pub stack: Option<Vec<Vec<f64>>>,
+}
+
+fn address(p: i64, n: usize, wrap: bool) -> usize {
+    let n = n as i64;
+    if wrap {
+        p.rem_euclid(n) as usize
+    } else {
+        p.clamp(0, n - 1) as usize
+    }
+}
+
+fn texel(data: &[f64], w: usize, h: usize, x: i64, y: i64, wrap: bool) -> f64 {
+    data[address(y, h, wrap) * w + address(x, w, wrap)]
+}
+
+/// Bilinear interpolation at `(x, y)` in texel units (centres at integers).
+pub fn bilinear(data: &[f64], w: usize, h: usize, x: f64, y: f64, wrap: bool) -> f64 {
+    let (fx, fy) = (x.floor(), y.floor());
+    let (tx, ty) = (x - fx, y - fy);
+    let (ix, iy) = (fx as i64, fy as i64);
+    let t = |dx, dy| texel(data, w, h, ix + dx, iy + dy, wrap);
+    let top = t(0, 0) * (1.0 - tx) + t(1, 0) * tx;
+    let bottom = t(0, 1) * (1.0 - tx) + t(1, 1) * tx;
+    top * (1.0 - ty) + bottom * ty
+}
+
+/// Uniform cubic B-spline at `(x, y)`: `Σ_{a,b} β_a(tx) β_b(ty) H[iy−1+b][ix−1+a]`.
+pub fn bspline(data: &[f64], w: usize, h: usize, x: f64, y: f64, wrap: bool) -> f64 {
+    let (fx, fy) = (x.floor(), y.floor());
+    let (wx, wy) = (bspline::weights(x - fx), bspline::weights(y - fy));
+    let (ix, iy) = (fx as i64, fy as i64);
+    let mut sum = 0.0;
+    for (b, wyb) in wy.iter().enumerate() {
+        for (a, wxa) in wx.iter().enumerate() {
+            sum += wyb * wxa * texel(data, w, h, ix - 1 + a as i64, iy - 1 + b as i64, wrap);
+        }
+    }
+    sum
+}
+
+/// Maps a coordinate on a grid `from` cells wide to a grid `to` cells wide (texel centres,
+/// domain edges aligned): `(p + ½)·to/from − ½`.
+pub fn rescale(p: f64, from: usize, to: usize) -> f64 {
+    (p + 0.5) * to as f64 / from as f64 - 0.5
+}
+
+impl CpuPyramid {
+    /// Builds every level; with `synthesize`, also the stack.
+    pub fn build(field: &HeightField, k_v: u32, wrap: bool, synthesize: bool) -> Result<Self> {
+        let layout = PyramidLayout::new(field.width(), field.height(), k_v)?;
+        let mut levels: Vec<Vec<f64>> = vec![field.data().iter().map(|&v| v as f64).collect()];
+        for i in 1..layout.count() {
+            let (s, d) = (layout.levels[i - 1], layout.levels[i]);
+            let (sw, sh, dw, dh) = (s.width as usize, s.height as usize, d.width as usize, d.height as usize);
+            let src = &levels[i - 1];
+            let mut out = vec![0.0; dw * dh];
+            for y in 0..dh {
+                for x in 0..dw {
+                    let sx = rescale(x as f64, dw, sw);
+                    let sy = rescale(y as f64, dh, sh);
+                    out[y * dw + x] = bilinear(src, sw, sh, sx, sy, wrap);
+                }
+            }
+            levels.push(out);
+        }
+        let mut me = Self { layout, wrap, levels, stack: None };
+        if synthesize {
+            let (w, h) = (field.width(), field.height());
+            let stack = (0..me.layout.count())
+                .map(|i| {
+                    let mut plane = vec![0.0; w * h];
+                    for y in 0..h {
+                        for x in 0..w {
+                            plane[y * w + x] = me.sample_pyramid(i, x as f64, y as f64);
+                        }
+                    }
+                    plane
+                })
+                .collect();
+            me.stack = Some(stack);
+        }
+        Ok(me)
+    }
+
+    /// True-pyramid sampling: B-spline on level `i` at `(x, y)` in level-0 texel units.
+    pub fn sample_pyramid(&self, i: usize, x: f64, y: f64) -> f64 {
+        let l0 = self.layout.levels[0];
+        let l = self.layout.levels[i];
+        let (w, h) = (l.width as usize, l.height as usize);
+        let lx = rescale(x, l0.width as usize, w);
+        let ly = rescale(y, l0.height as usize, h);
+        bspline(&self.levels[i], w, h, lx, ly, self.wrap)
+    }
+
+    /// Stack sampling: bilinear on stack plane `i` at `(x, y)` in level-0 texel units.
+    /// `None` if the stack was not built.
+    pub fn sample_stack(&self, i: usize, x: f64, y: f64) -> Option<f64> {
+        let l0 = self.layout.levels[0];
+        self.stack.as_ref().map(|s| bilinear(&s[i], l0.width as usize, l0.height as usize, x, y, self.wrap))
+    }
+}

@@ -1,0 +1,3 @@
+//! Scenes and height fields.
+pub mod heightfield;
+pub use heightfield::HeightField;

@@ -1,0 +1,82 @@
+//! synchronization2 barriers. Nothing else in hfgi writes barriers.
+
+use ash::vk;
+
+use super::Context;
+
+fn memory_barrier(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let b = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)];
+    let dep = vk::DependencyInfo::default().memory_barriers(&b);
+    unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &dep) };
+}
+
+/// Compute shader writes → compute shader reads/writes (between passes or pyramid levels).
+pub fn compute_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+        (
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        ),
+    );
+}
+
+/// Transfer writes (uploads) → compute shader reads/writes.
+pub fn transfer_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
+        (
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+        ),
+    );
+}
+
+/// Compute shader writes → transfer reads (downloads).
+pub fn compute_to_transfer(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
+        (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ),
+    );
+}
+
+/// Full image layout transition of the colour subresource.
+#[allow(clippy::too_many_arguments)]
+pub fn image_layout(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    image: vk::Image,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+    src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+) {
+    let b = [vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(src.0)
+        .src_access_mask(src.1)
+        .dst_stage_mask(dst.0)
+        .dst_access_mask(dst.1)
+        .old_layout(old)
+        .new_layout(new)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(image)
+        .subresource_range(super::memory::color_range())];
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&b);
+    unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &dep) };
+}

@@ -1,0 +1,488 @@
+//! Device choice, ownership, validation messenger and a submit-and-wait helper.
+
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use crate::error::{Error, Result, VkCall};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How [`Context::headless_with`] creates its instance and device.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Enable `VK_LAYER_KHRONOS_validation` and collect its warnings and errors.
+    /// `None` reads the environment: `HFGI_VALIDATION=1` enables it.
+    pub validation: Option<bool>,
+    /// Substring (case-insensitive) of the device name to use. `None` reads `HFGI_DEVICE`.
+    pub device_filter: Option<String>,
+}
+
+/// What a host engine hands to [`Context::from_raw`]. hfgi destroys none of these.
+pub struct RawHandles {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    /// A queue that supports compute (and graphics for the view pass). hfgi submits to it only
+    /// from [`Context::submit_and_wait`], never from the recording functions.
+    pub queue: vk::Queue,
+    pub queue_family_index: u32,
+    /// The host's allocator; hfgi allocates and frees its own resources through it.
+    pub allocator: Arc<Mutex<Allocator>>,
+    /// Whether the host enabled `VK_EXT_debug_utils` on the instance (debug labels and names).
+    pub debug_utils: bool,
+}
+
+/// Facts about the chosen device, for reports and benchmarks.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub kind: vk::PhysicalDeviceType,
+    pub driver: String,
+    pub api_version: (u32, u32, u32),
+    pub max_image_dimension_2d: u32,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Valid bits of a timestamp on hfgi's queue family (0: no timestamps).
+    pub timestamp_valid_bits: u32,
+}
+
+struct Messenger {
+    loader: ash::ext::debug_utils::Instance,
+    raw: vk::DebugUtilsMessengerEXT,
+}
+
+/// A Vulkan instance, device, queue and allocator — owned ([`Context::headless`]) or
+/// borrowed from a host engine ([`Context::from_raw`]).
+pub struct Context {
+    entry: ash::Entry,
+    instance: ash::Instance,
+    physical: vk::PhysicalDevice,
+    device: ash::Device,
+    queue: vk::Queue,
+    queue_family: u32,
+    allocator: ManuallyDrop<Arc<Mutex<Allocator>>>,
+    owned: bool,
+    messenger: Option<Messenger>,
+    messages: Arc<Mutex<Vec<String>>>,
+    debug_device: Option<ash::ext::debug_utils::Device>,
+    info: DeviceInfo,
+    submit: Mutex<Option<(vk::CommandPool, vk::Fence)>>,
+}
+
+unsafe extern "system" fn on_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if user.is_null() || data.is_null() {
+        return vk::FALSE;
+    }
+    // SAFETY: `user` is the `Mutex<Vec<String>>` owned by the Context's Arc, which outlives the
+    // messenger; `data` is valid for the duration of the callback.
+    let (store, data) = unsafe { (&*(user as *const Mutex<Vec<String>>), &*data) };
+    let text = |p: *const std::ffi::c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+        }
+    };
+    let msg = format!("[{severity:?} {types:?}] {}: {}", text(data.p_message_id_name), text(data.p_message));
+    if let Ok(mut v) = store.lock() {
+        v.push(msg);
+    }
+    vk::FALSE
+}
+
+fn env_flag(name: &str) -> bool {
+    std::env::var(name).map(|v| !v.is_empty() && v != "0").unwrap_or(false)
+}
+
+fn rank(kind: vk::PhysicalDeviceType) -> u32 {
+    match kind {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+impl Context {
+    /// Creates an instance and device of its own; see [`ContextOptions`] for the environment
+    /// variables it reads. Works on lavapipe.
+    pub fn headless() -> Result<Self> {
+        Self::headless_with(&ContextOptions::default())
+    }
+
+    /// Like [`Context::headless`] with explicit options.
+    pub fn headless_with(opts: &ContextOptions) -> Result<Self> {
+        let validation = opts.validation.unwrap_or_else(|| env_flag("HFGI_VALIDATION"));
+        let filter = opts.device_filter.clone().or_else(|| std::env::var("HFGI_DEVICE").ok()).filter(|s| !s.is_empty());
+        // SAFETY: loading the system Vulkan loader.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
+
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+        let exts =
+            unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
+        let has_debug_utils =
+            exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
+        let mut layer_ptrs = Vec::new();
+        if validation {
+            if !layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER)) {
+                return Err(Error::Unsupported(
+                    "validation requested (HFGI_VALIDATION=1) but VK_LAYER_KHRONOS_validation is not installed \
+                     (Debian: apt-get install vulkan-validationlayers)"
+                        .into(),
+                ));
+            }
+            if !has_debug_utils {
+                return Err(Error::Unsupported("validation requested but VK_EXT_debug_utils is unavailable".into()));
+            }
+            layer_ptrs.push(VALIDATION_LAYER.as_ptr());
+        }
+        let mut ext_ptrs = Vec::new();
+        if has_debug_utils {
+            ext_ptrs.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+
+        let messages: Arc<Mutex<Vec<String>>> = Arc::new(Mutex::new(Vec::new()));
+        let mut dbg_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
+                    | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+            )
+            .pfn_user_callback(Some(on_message))
+            .user_data(Arc::as_ptr(&messages) as *mut c_void);
+
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"hfgi")
+            .engine_name(c"hfgi")
+            .api_version(vk::API_VERSION_1_3);
+        let mut ici = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layer_ptrs)
+            .enabled_extension_names(&ext_ptrs);
+        if validation {
+            // Chained so that instance creation/destruction messages are caught too.
+            ici = ici.push_next(&mut dbg_info);
+        }
+        let instance = unsafe { entry.create_instance(&ici, None) }.vk("vkCreateInstance")?;
+        let messenger = if validation {
+            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            match unsafe { loader.create_debug_utils_messenger(&dbg_info, None) } {
+                Ok(raw) => Some(Messenger { loader, raw }),
+                Err(e) => {
+                    unsafe { instance.destroy_instance(None) };
+                    return Err(Error::Vulkan { call: "vkCreateDebugUtilsMessengerEXT", result: e });
+                }
+            }
+        } else {
+            None
+        };
+
+        // From here on, failures must clean up the instance.
+        let cleanup = |instance: &ash::Instance, messenger: &Option<Messenger>| unsafe {
+            if let Some(m) = messenger {
+                m.loader.destroy_debug_utils_messenger(m.raw, None);
+            }
+            instance.destroy_instance(None);
+        };
+        let picked = match Self::pick_device(&instance, filter.as_deref()) {
+            Ok(p) => p,
+            Err(e) => {
+                cleanup(&instance, &messenger);
+                return Err(e);
+            }
+        };
+        let (physical, family) = picked;
+        let priorities = [1.0f32];
+        let qci = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+        let dci = vk::DeviceCreateInfo::default().queue_create_infos(&qci).push_next(&mut f13);
+        let device = match unsafe { instance.create_device(physical, &dci, None) } {
+            Ok(d) => d,
+            Err(e) => {
+                cleanup(&instance, &messenger);
+                return Err(Error::Vulkan { call: "vkCreateDevice", result: e });
+            }
+        };
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let allocator = match Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        }) {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_device(None) };
+                cleanup(&instance, &messenger);
+                return Err(Error::Allocation { name: "allocator".into(), size: 0, reason: e.to_string() });
+            }
+        };
+        let debug_device = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let info = Self::describe(&instance, physical, family);
+        Ok(Self {
+            entry,
+            instance,
+            physical,
+            device,
+            queue,
+            queue_family: family,
+            allocator: ManuallyDrop::new(Arc::new(Mutex::new(allocator))),
+            owned: true,
+            messenger,
+            messages,
+            debug_device,
+            info,
+            submit: Mutex::new(None),
+        })
+    }
+
+    /// Wraps a host engine's Vulkan objects. The device must have Vulkan 1.3 with
+    /// `synchronization2` enabled. hfgi never destroys the instance, device or allocator it was
+    /// given; it destroys only the objects it created (its own command pool and fence).
+    /// Validation messages are the host's business in this mode (no messenger is installed).
+    pub fn from_raw(raw: RawHandles) -> Result<Self> {
+        let props = unsafe { raw.instance.get_physical_device_properties(raw.physical_device) };
+        if props.api_version < vk::API_VERSION_1_3 {
+            return Err(Error::Unsupported(format!(
+                "device API version {}.{} < 1.3",
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version)
+            )));
+        }
+        let debug_device = raw.debug_utils.then(|| ash::ext::debug_utils::Device::new(&raw.instance, &raw.device));
+        let info = Self::describe(&raw.instance, raw.physical_device, raw.queue_family_index);
+        Ok(Self {
+            entry: raw.entry,
+            instance: raw.instance,
+            physical: raw.physical_device,
+            device: raw.device,
+            queue: raw.queue,
+            queue_family: raw.queue_family_index,
+            allocator: ManuallyDrop::new(raw.allocator),
+            owned: false,
+            messenger: None,
+            messages: Arc::new(Mutex::new(Vec::new())),
+            debug_device,
+            info,
+            submit: Mutex::new(None),
+        })
+    }
+
+    fn pick_device(instance: &ash::Instance, filter: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+        let devices = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+        let mut candidates = Vec::new();
+        let mut seen = Vec::new();
+        for pd in devices {
+            let props = unsafe { instance.get_physical_device_properties(pd) };
+            let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            seen.push(name.clone());
+            if props.api_version < vk::API_VERSION_1_3 {
+                continue;
+            }
+            if let Some(f) = filter {
+                if !name.to_lowercase().contains(&f.to_lowercase()) {
+                    continue;
+                }
+            }
+            let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+            let want = vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS;
+            if let Some(fam) = families.iter().position(|f| f.queue_flags.contains(want)) {
+                candidates.push((rank(props.device_type), pd, fam as u32));
+            }
+        }
+        candidates.sort_by_key(|c| c.0);
+        candidates.first().map(|c| (c.1, c.2)).ok_or_else(|| {
+            Error::NoDevice(format!(
+                "{}; devices present: [{}] (need Vulkan 1.3 and a graphics+compute queue)",
+                filter.map(|f| format!("none matches HFGI_DEVICE={f:?}")).unwrap_or_else(|| "none usable".into()),
+                seen.join(", ")
+            ))
+        })
+    }
+
+    fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+        let props = p2.properties;
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let dname = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let dinfo = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let valid_bits = if props.limits.timestamp_compute_and_graphics == vk::TRUE || props.limits.timestamp_period > 0.0 {
+            families.get(family as usize).map(|f| f.timestamp_valid_bits).unwrap_or(0)
+        } else {
+            0
+        };
+        DeviceInfo {
+            name,
+            kind: props.device_type,
+            driver: format!("{dname} {dinfo}").trim().to_string(),
+            api_version: (
+                vk::api_version_major(props.api_version),
+                vk::api_version_minor(props.api_version),
+                vk::api_version_patch(props.api_version),
+            ),
+            max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            timestamp_period: props.limits.timestamp_period,
+            timestamp_valid_bits: valid_bits,
+        }
+    }
+
+    /// Names of every Vulkan 1.3 capable device (for `hfgi devices`).
+    pub fn list_devices() -> Result<Vec<(String, vk::PhysicalDeviceType)>> {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
+        let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
+        let instance = unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }
+            .vk("vkCreateInstance")?;
+        let out = unsafe { instance.enumerate_physical_devices() }.map(|ds| {
+            ds.into_iter()
+                .map(|pd| {
+                    let p = unsafe { instance.get_physical_device_properties(pd) };
+                    let n = p.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+                    (n, p.device_type)
+                })
+                .collect()
+        });
+        unsafe { instance.destroy_instance(None) };
+        out.vk("vkEnumeratePhysicalDevices")
+    }
+
+    pub fn entry(&self) -> &ash::Entry {
+        &self.entry
+    }
+    pub fn instance(&self) -> &ash::Instance {
+        &self.instance
+    }
+    pub fn physical_device(&self) -> vk::PhysicalDevice {
+        self.physical
+    }
+    pub fn device(&self) -> &ash::Device {
+        &self.device
+    }
+    pub fn queue(&self) -> vk::Queue {
+        self.queue
+    }
+    pub fn queue_family(&self) -> u32 {
+        self.queue_family
+    }
+    pub fn allocator(&self) -> &Arc<Mutex<Allocator>> {
+        &self.allocator
+    }
+    pub fn info(&self) -> &DeviceInfo {
+        &self.info
+    }
+    /// The `VK_EXT_debug_utils` device functions, when the extension is enabled.
+    pub fn debug_utils(&self) -> Option<&ash::ext::debug_utils::Device> {
+        self.debug_device.as_ref()
+    }
+
+    /// Whether this context installed a validation messenger.
+    pub fn validation_enabled(&self) -> bool {
+        self.messenger.is_some()
+    }
+    /// The shared store of validation messages (also filled during destruction).
+    pub fn validation_store(&self) -> Arc<Mutex<Vec<String>>> {
+        self.messages.clone()
+    }
+    /// Validation warnings and errors collected so far (clears the list).
+    pub fn take_validation_messages(&self) -> Vec<String> {
+        self.messages.lock().map(|mut v| std::mem::take(&mut *v)).unwrap_or_default()
+    }
+    /// `Err(Error::Validation)` if the validation layer reported anything since the last call.
+    pub fn check_validation(&self) -> Result<()> {
+        let messages = self.take_validation_messages();
+        if messages.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::Validation { messages })
+        }
+    }
+
+    /// Names a Vulkan object for debuggers and validation messages (no-op without debug utils).
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let (Some(d), Ok(c)) = (&self.debug_device, CString::new(name)) {
+            let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
+            let _ = unsafe { d.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    /// Records commands with `f` into a fresh primary command buffer, submits it to the queue
+    /// and waits for completion. For headless use and uploads; engines record into their own
+    /// command buffers instead. The queue must not be used by another thread meanwhile.
+    pub fn submit_and_wait<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> Result<R>) -> Result<R> {
+        let mut guard = self.submit.lock().map_err(|_| Error::Unsupported("submit lock poisoned".into()))?;
+        if guard.is_none() {
+            let pool_info = vk::CommandPoolCreateInfo::default()
+                .queue_family_index(self.queue_family)
+                .flags(vk::CommandPoolCreateFlags::TRANSIENT | vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+            let pool = unsafe { self.device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+            let fence = match unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) } {
+                Ok(f) => f,
+                Err(e) => {
+                    unsafe { self.device.destroy_command_pool(pool, None) };
+                    return Err(Error::Vulkan { call: "vkCreateFence", result: e });
+                }
+            };
+            *guard = Some((pool, fence));
+        }
+        let (pool, fence) = guard.expect("set above");
+        let alloc = vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1);
+        let cmd = unsafe { self.device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        let run = || -> Result<R> {
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            unsafe { self.device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+            let r = f(cmd)?;
+            unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            let cbi = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+            let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbi)];
+            unsafe { self.device.reset_fences(&[fence]) }.vk("vkResetFences")?;
+            unsafe { self.device.queue_submit2(self.queue, &submit, fence) }.vk("vkQueueSubmit2")?;
+            unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+            Ok(r)
+        };
+        let result = run();
+        unsafe { self.device.free_command_buffers(pool, &[cmd]) };
+        result
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            if let Ok(mut g) = self.submit.lock() {
+                if let Some((pool, fence)) = g.take() {
+                    self.device.destroy_command_pool(pool, None);
+                    self.device.destroy_fence(fence, None);
+                }
+            }
+            // Our Arc of the allocator goes first so that an owned allocator frees its memory
+            // before the device is destroyed.
+            ManuallyDrop::drop(&mut self.allocator);
+            if self.owned {
+                self.device.destroy_device(None);
+                if let Some(m) = self.messenger.take() {
+                    m.loader.destroy_debug_utils_messenger(m.raw, None);
+                }
+                self.instance.destroy_instance(None);
+            }
+        }
+    }
+}

@@ -1,0 +1,232 @@
+//! Buffers and images over gpu-allocator, each with a name (used for the allocation, the
+//! debug-utils object name and memory reports).
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::Context;
+use crate::error::{Error, Result, VkCall};
+
+/// A buffer and its memory. Destroy it with [`Buffer::destroy`]; hfgi never frees it implicitly.
+pub struct Buffer {
+    pub raw: vk::Buffer,
+    pub size: u64,
+    pub name: String,
+    alloc: Option<Allocation>,
+}
+
+/// A 2D image, its default view and memory. Destroy with [`Image::destroy`].
+pub struct Image {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    pub samples: vk::SampleCountFlags,
+    pub name: String,
+    alloc: Option<Allocation>,
+}
+
+fn alloc_err(name: &str, size: u64, e: impl std::fmt::Display) -> Error {
+    Error::Allocation { name: name.to_string(), size, reason: e.to_string() }
+}
+
+impl Buffer {
+    /// Creates a buffer of `size` bytes. `location` picks GPU-only or host-visible memory.
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Self> {
+        let size = size.max(4);
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let d = ctx.device();
+        let raw = unsafe { d.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let requirements = unsafe { d.get_buffer_memory_requirements(raw) };
+        let allocation = ctx.allocator().lock().map_err(|e| alloc_err(name, size, e)).and_then(|mut a| {
+            a.allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| alloc_err(name, size, e))
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { d.destroy_buffer(raw, None) };
+                return Err(e);
+            }
+        };
+        if let Err(e) = unsafe { d.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            unsafe { d.destroy_buffer(raw, None) };
+            if let Ok(mut a) = ctx.allocator().lock() {
+                let _ = a.free(allocation);
+            }
+            return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
+        }
+        ctx.set_name(raw, name);
+        Ok(Self { raw, size, name: name.to_string(), alloc: Some(allocation) })
+    }
+
+    /// The host-visible bytes of a `CpuToGpu`/`GpuToCpu` buffer.
+    pub fn mapped(&mut self) -> Result<&mut [u8]> {
+        let name = self.name.clone();
+        let size = self.size as usize;
+        self.alloc
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .map(|s| &mut s[..size])
+            .ok_or_else(|| Error::Unsupported(format!("buffer '{name}' is not host-visible")))
+    }
+
+    /// Frees the buffer and its memory.
+    pub fn destroy(mut self, ctx: &Context) {
+        unsafe { ctx.device().destroy_buffer(self.raw, None) };
+        if let (Some(a), Ok(mut al)) = (self.alloc.take(), ctx.allocator().lock()) {
+            let _ = al.free(a);
+        }
+    }
+
+    /// Descriptor info covering the whole buffer.
+    pub fn whole(&self) -> vk::DescriptorBufferInfo {
+        vk::DescriptorBufferInfo::default().buffer(self.raw).offset(0).range(vk::WHOLE_SIZE)
+    }
+}
+
+impl Image {
+    /// Creates a 2D image (one mip, one layer) in `UNDEFINED` layout with a colour view.
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        extent: vk::Extent2D,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+        samples: vk::SampleCountFlags,
+    ) -> Result<Self> {
+        let d = ctx.device();
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(samples)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let raw = unsafe { d.create_image(&info, None) }.vk("vkCreateImage")?;
+        let requirements = unsafe { d.get_image_memory_requirements(raw) };
+        let size = requirements.size;
+        let allocation = ctx.allocator().lock().map_err(|e| alloc_err(name, size, e)).and_then(|mut a| {
+            a.allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| alloc_err(name, size, e))
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { d.destroy_image(raw, None) };
+                return Err(e);
+            }
+        };
+        let mut img = Self { raw, view: vk::ImageView::null(), format, extent, samples, name: name.into(), alloc: Some(allocation) };
+        let bound = unsafe {
+            d.bind_image_memory(raw, img.alloc.as_ref().map(|a| a.memory()).unwrap_or_default(), img.alloc.as_ref().map(|a| a.offset()).unwrap_or(0))
+        };
+        if let Err(e) = bound {
+            img.destroy(ctx);
+            return Err(Error::Vulkan { call: "vkBindImageMemory", result: e });
+        }
+        let vinfo = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(vk::ImageViewType::TYPE_2D)
+            .format(format)
+            .subresource_range(color_range());
+        match unsafe { d.create_image_view(&vinfo, None) } {
+            Ok(v) => img.view = v,
+            Err(e) => {
+                img.destroy(ctx);
+                return Err(Error::Vulkan { call: "vkCreateImageView", result: e });
+            }
+        }
+        ctx.set_name(raw, name);
+        Ok(img)
+    }
+
+    /// Frees the image, its view and memory.
+    pub fn destroy(mut self, ctx: &Context) {
+        unsafe {
+            if self.view != vk::ImageView::null() {
+                ctx.device().destroy_image_view(self.view, None);
+            }
+            ctx.device().destroy_image(self.raw, None);
+        }
+        if let (Some(a), Ok(mut al)) = (self.alloc.take(), ctx.allocator().lock()) {
+            let _ = al.free(a);
+        }
+    }
+
+    /// Bytes of device memory bound to the image.
+    pub fn size_bytes(&self) -> u64 {
+        self.alloc.as_ref().map(|a| a.size()).unwrap_or(0)
+    }
+}
+
+/// The single colour subresource (mip 0, layer 0).
+pub fn color_range() -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1)
+}
+
+/// Uploads `data` into `dst` (a device buffer with TRANSFER_DST usage) at byte `offset`,
+/// through a staging buffer, and waits. The copy is followed by a barrier making it visible to
+/// compute shaders.
+pub fn upload(ctx: &Context, dst: &Buffer, offset: u64, data: &[u8]) -> Result<()> {
+    let mut staging = Buffer::new(ctx, "hfgi.staging.upload", data.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+    let r = staging.mapped().map(|m| m[..data.len()].copy_from_slice(data)).and_then(|_| {
+        ctx.submit_and_wait(|cmd| {
+            let region = [vk::BufferCopy::default().src_offset(0).dst_offset(offset).size(data.len() as u64)];
+            unsafe { ctx.device().cmd_copy_buffer(cmd, staging.raw, dst.raw, &region) };
+            super::barrier::transfer_to_compute(ctx, cmd);
+            Ok(())
+        })
+    });
+    staging.destroy(ctx);
+    r
+}
+
+/// Reads `len` bytes from `src` (a buffer with TRANSFER_SRC usage) at byte `offset` and waits.
+/// Inserts a barrier that makes prior compute writes visible to the copy.
+pub fn download(ctx: &Context, src: &Buffer, offset: u64, len: u64) -> Result<Vec<u8>> {
+    let mut staging = Buffer::new(ctx, "hfgi.staging.download", len, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    let r = ctx
+        .submit_and_wait(|cmd| {
+            super::barrier::compute_to_transfer(ctx, cmd);
+            let region = [vk::BufferCopy::default().src_offset(offset).dst_offset(0).size(len)];
+            unsafe { ctx.device().cmd_copy_buffer(cmd, src.raw, staging.raw, &region) };
+            Ok(())
+        })
+        .and_then(|_| staging.mapped().map(|m| m[..len as usize].to_vec()));
+    staging.destroy(ctx);
+    r
+}
+
+/// `upload` for f32 slices.
+pub fn upload_f32(ctx: &Context, dst: &Buffer, offset_floats: u64, data: &[f32]) -> Result<()> {
+    upload(ctx, dst, offset_floats * 4, bytemuck::cast_slice(data))
+}
+
+/// `download` for f32 slices.
+pub fn download_f32(ctx: &Context, src: &Buffer, offset_floats: u64, count: u64) -> Result<Vec<f32>> {
+    let bytes = download(ctx, src, offset_floats * 4, count * 4)?;
+    Ok(bytes.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+}
