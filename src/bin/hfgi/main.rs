@@ -1,1 +1,233 @@
-fn main() {}
+//! `hfgi` — command-line front end of the hfgi library.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand};
+use hfgi::frame::pyramid::{HeightPyramid, PyramidMode};
+use hfgi::scene::generators::Generator;
+use hfgi::scene::load::{load_heightfield, LoadOptions};
+use hfgi::scene::HeightField;
+use hfgi::vk::{Context, ContextOptions, Recorder, StageTimer};
+
+/// Real-time global illumination on dynamic height fields (Nowrouzezahrai & Snyder 2009), on Vulkan.
+///
+/// Environment: HFGI_DEVICE=<substring> picks the Vulkan device (default: discrete > integrated >
+/// virtual > CPU); HFGI_VALIDATION=1 enables the validation layer and fails on any message;
+/// VK_DRIVER_FILES pins a driver (tools/env.sh pins lavapipe).
+#[derive(Parser)]
+#[command(name = "hfgi", version, about, long_about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render the default scene (or a given height field) and write images to --out.
+    ///
+    /// For now this writes the height field and its pyramid levels: heights.png / heights.exr,
+    /// pyramid.png (a contact sheet of levels, B-spline resampled to full resolution) and
+    /// pyramid.exr (one layer per level), and prints per-stage GPU timings and memory.
+    Render(RenderArgs),
+    /// List the Vulkan devices and which one hfgi would choose.
+    Devices,
+    /// Write the embedded SPIR-V of every shader to a folder (for hosts building their own pipelines).
+    Spirv {
+        /// Output folder.
+        #[arg(long, default_value = "out/spirv")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Height field file: .png (8/16-bit grey), .exr (Y, R or height channel), .raw/.f32 (needs --raw-size).
+    #[arg(long, conflicts_with = "generator")]
+    heights: Option<PathBuf>,
+    /// Procedural height field: fbm, sines, cones, cliff, craters, city, optionally with
+    /// parameters, e.g. `fbm:seed=7,octaves=6`.
+    #[arg(long, default_value = "fbm")]
+    generator: String,
+    /// Size of a generated field, `N` or `WxH`.
+    #[arg(long, default_value = "256")]
+    size: String,
+    /// Size of a .raw/.f32 file, `WxH`.
+    #[arg(long)]
+    raw_size: Option<String>,
+    /// Multiplies every height read from a file.
+    #[arg(long, default_value_t = 1.0)]
+    height_scale: f32,
+    /// Pyramid level step k_v (levels per halving of resolution, ≥ 1).
+    #[arg(long, default_value_t = 4)]
+    level_step: u32,
+    /// Pyramid storage: `stack` (paper) or `pyramid` (B-spline on the fly).
+    #[arg(long, default_value = "stack")]
+    pyramid: String,
+    /// Treat the field as periodic.
+    #[arg(long)]
+    wrap: bool,
+    /// Vulkan device name substring (overrides HFGI_DEVICE).
+    #[arg(long)]
+    device: Option<String>,
+    /// Enable the Vulkan validation layer and fail on any message.
+    #[arg(long)]
+    validation: bool,
+}
+
+fn parse_size(s: &str, what: &str) -> Result<(usize, usize)> {
+    let parse = |t: &str| t.trim().parse::<usize>().with_context(|| format!("{what} {s:?}: expected N or WxH"));
+    match s.split_once(['x', 'X', '×']) {
+        Some((w, h)) => Ok((parse(w)?, parse(h)?)),
+        None => {
+            let n = parse(s)?;
+            Ok((n, n))
+        }
+    }
+}
+
+fn context(device: Option<String>, validation: bool) -> Result<Context> {
+    let opts = ContextOptions { validation: validation.then_some(true), device_filter: device };
+    Context::headless_with(&opts).context("creating the Vulkan context")
+}
+
+fn load_field(a: &RenderArgs, max_dim: u32) -> Result<HeightField> {
+    if let Some(path) = &a.heights {
+        let raw_size = a.raw_size.as_deref().map(|s| parse_size(s, "--raw-size")).transpose()?;
+        let opts = LoadOptions { height_scale: a.height_scale, raw_size, max_dim };
+        return load_heightfield(path, &opts).with_context(|| format!("loading height field {}", path.display()));
+    }
+    let (w, h) = parse_size(&a.size, "--size")?;
+    let gen: Generator = a.generator.parse().with_context(|| format!("--generator {:?}", a.generator))?;
+    gen.generate(w, h).with_context(|| format!("generating {}×{} field with {:?}", w, h, a.generator))
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let mode: PyramidMode = a.pyramid.parse().context("--pyramid")?;
+    let ctx = context(a.device.clone(), a.validation)?;
+    let field = load_field(&a, ctx.info().max_image_dimension_2d)?;
+    let (w, h) = (field.width(), field.height());
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    eprintln!("device: {} ({}), field {w}×{h}, k_v = {}, {mode}", ctx.info().name, ctx.info().driver, a.level_step);
+
+    let pyr = HeightPyramid::new(&ctx, w, h, a.level_step, mode, a.wrap).context("creating the height pyramid")?;
+    pyr.upload(&ctx, &field)?;
+    let mut timer = StageTimer::new(&ctx, 32)?;
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
+        pyr.record(&mut rec);
+        Ok(())
+    })?;
+    match timer.timings(&ctx) {
+        Ok(t) => {
+            let label = if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU { " (lavapipe: CPU time, not a GPU time)" } else { "" };
+            for (stage, ms) in t {
+                eprintln!("  {stage:<24} {ms:9.3} ms{label}");
+            }
+        }
+        Err(e) => eprintln!("  no stage timings: {e}"),
+    }
+    eprintln!("  pyramid memory: {:.2} MiB ({} levels)", pyr.memory_bytes() as f64 / 1048576.0, pyr.layout().count());
+
+    let heights_png = a.out.join("heights.png");
+    hfgi::io::png::write_gray_normalized(&heights_png, w, h, field.data())?;
+    hfgi::io::exr::write_scalar(&a.out.join("heights.exr"), w, h, "height", field.data())?;
+
+    // Levels, each B-spline resampled to full resolution (the stack, or the same filter on the fly).
+    let count = pyr.layout().count();
+    let mut planes = Vec::with_capacity(count);
+    for i in 0..count {
+        let plane = match mode {
+            PyramidMode::Stack => pyr.read_stack(&ctx, i)?,
+            PyramidMode::Pyramid => {
+                let q: Vec<[f32; 3]> = (0..w * h).map(|k| [i as f32, (k % w) as f32, (k / w) as f32]).collect();
+                pyr.probe(&ctx, &q)?
+            }
+        };
+        planes.push(plane);
+    }
+    let names: Vec<String> = (0..count).map(|i| format!("level_{i:02}")).collect();
+    let layers: Vec<hfgi::io::exr::Layer> = planes
+        .iter()
+        .zip(&names)
+        .map(|(p, n)| hfgi::io::exr::Layer { name: n.as_str(), channels: vec![("height", p.as_slice())] })
+        .collect();
+    hfgi::io::exr::write_layers(&a.out.join("pyramid.exr"), w, h, &layers)?;
+    let sheet = contact_sheet(&planes, w, h, field.range());
+    hfgi::io::png::write_tonemapped(&a.out.join("pyramid.png"), sheet.1, sheet.2, &sheet.0, 0.0)?;
+    pyr.destroy(&ctx);
+    timer.destroy(&ctx);
+    ctx.check_validation()?;
+    eprintln!("wrote {}/{{heights.png, heights.exr, pyramid.png, pyramid.exr}}", a.out.display());
+    Ok(())
+}
+
+/// Every k-th level side by side (4 per row), grey-scaled by the field's range.
+fn contact_sheet(planes: &[Vec<f32>], w: usize, h: usize, range: (f32, f32)) -> (Vec<[f32; 3]>, usize, usize) {
+    let step = (planes.len() / 8).max(1);
+    let picks: Vec<&Vec<f32>> = planes.iter().step_by(step).take(8).collect();
+    let cols = picks.len().min(4);
+    let rows = picks.len().div_ceil(cols);
+    let (sw, sh) = (cols * (w + 4), rows * (h + 4));
+    let mut img = vec![[0.0f32; 3]; sw * sh];
+    let span = (range.1 - range.0).max(f32::MIN_POSITIVE);
+    for (n, p) in picks.iter().enumerate() {
+        let (ox, oy) = ((n % cols) * (w + 4) + 2, (n / cols) * (h + 4) + 2);
+        for y in 0..h {
+            for x in 0..w {
+                // Linear value whose sRGB encoding is proportional to the height.
+                let g = ((p[y * w + x] - range.0) / span).clamp(0.0, 1.0);
+                let lin = if g <= 0.04045 { g / 12.92 } else { ((g + 0.055) / 1.055).powf(2.4) };
+                img[(oy + y) * sw + ox + x] = [lin; 3];
+            }
+        }
+    }
+    (img, sw, sh)
+}
+
+fn devices() -> Result<()> {
+    let list = Context::list_devices().context("listing Vulkan devices")?;
+    if list.is_empty() {
+        bail!("no Vulkan 1.3 device found; install mesa-vulkan-drivers for lavapipe");
+    }
+    for (name, kind) in &list {
+        println!("{name} ({kind:?})");
+    }
+    let ctx = Context::headless_with(&ContextOptions { validation: Some(false), device_filter: None })?;
+    let i = ctx.info();
+    println!(
+        "chosen: {} — driver {}, Vulkan {}.{}.{}, maxImageDimension2D {}, timestamps: {}",
+        i.name,
+        i.driver,
+        i.api_version.0,
+        i.api_version.1,
+        i.api_version.2,
+        i.max_image_dimension_2d,
+        if i.timestamp_valid_bits > 0 { format!("{} bits, {} ns/tick", i.timestamp_valid_bits, i.timestamp_period) } else { "none".into() }
+    );
+    Ok(())
+}
+
+fn spirv(out: &Path) -> Result<()> {
+    for s in hfgi::shaders::ALL {
+        let path = out.join(format!("{}.spv", s.name));
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(s.words)).with_context(|| format!("writing {}", path.display()))?;
+        println!("{}", path.display());
+    }
+    Ok(())
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Render(a) => render(a),
+        Command::Devices => devices(),
+        Command::Spirv { out } => spirv(&out),
+    }
+}

@@ -59,7 +59,9 @@ pub fn compile_tree(root: &Path) -> Result<Vec<Compiled>, String> {
         let kind = stage_of(&file)?;
         let text = std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
         let mut opts = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
-        opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_3 as u32);
+        // Vulkan 1.2 / SPIR-V 1.5: avoids LocalSizeId (SPIR-V 1.6), which needs maintenance4,
+        // so host engines need not enable it.
+        opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
         opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
         opts.set_generate_debug_info();
         let inc = inc_dir.clone();

@@ -1,0 +1,131 @@
+//! GPU height pyramid against its f64 CPU twin, both storage modes.
+//! Tolerance: max |GPU − CPU| ≤ 1e-4 × height range, on levels, stack planes and probes.
+
+mod common;
+
+use common::{gpu, max_abs_diff, rough_field};
+use hfgi::frame::pyramid::{HeightPyramid, PyramidLayout, PyramidMode};
+use hfgi::reference::pyramid::CpuPyramid;
+use hfgi::vk::{Recorder, StageTimer};
+
+fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMode, wrap: bool) {
+    let field = rough_field(w, h, (w * 31 + h + k_v as usize) as u32);
+    let (lo, hi) = field.range();
+    let tol = 1e-4 * (hi - lo) as f64;
+    let pyr = HeightPyramid::new(ctx, w, h, k_v, mode, wrap).unwrap();
+    pyr.upload(ctx, &field).unwrap();
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(ctx, cmd, None);
+        pyr.record(&mut rec);
+        Ok(())
+    })
+    .unwrap();
+    let cpu = CpuPyramid::build(&field, k_v, wrap, mode == PyramidMode::Stack).unwrap();
+    let what = format!("{w}×{h} k_v={k_v} {mode} wrap={wrap}");
+    assert_eq!(pyr.layout(), &cpu.layout, "{what}: layouts differ");
+    let mut worst = 0.0f64;
+    for i in 0..cpu.layout.count() {
+        let err = max_abs_diff(&pyr.read_level(ctx, i).unwrap(), &cpu.levels[i]);
+        assert!(err <= tol, "{what}: level {i} max error {err:e} > {tol:e}");
+        worst = worst.max(err);
+        if let Some(stack) = &cpu.stack {
+            let err = max_abs_diff(&pyr.read_stack(ctx, i).unwrap(), &stack[i]);
+            assert!(err <= tol, "{what}: stack plane {i} max error {err:e} > {tol:e}");
+            worst = worst.max(err);
+        }
+    }
+    // Probes at off-grid positions, including outside the domain (clamp / wrap addressing).
+    let mut queries = Vec::new();
+    let mut s = 12345u32;
+    let mut rnd = || {
+        s = s.wrapping_mul(1664525).wrapping_add(1013904223);
+        (s >> 8) as f32 / (1u32 << 24) as f32
+    };
+    for i in 0..cpu.layout.count() {
+        for _ in 0..40 {
+            queries.push([i as f32, rnd() * (w as f32 + 4.0) - 2.0, rnd() * (h as f32 + 4.0) - 2.0]);
+        }
+    }
+    let got = pyr.probe(ctx, &queries).unwrap();
+    let want: Vec<f64> = queries
+        .iter()
+        .map(|q| match mode {
+            PyramidMode::Stack => cpu.sample_stack(q[0] as usize, q[1] as f64, q[2] as f64).unwrap(),
+            PyramidMode::Pyramid => cpu.sample_pyramid(q[0] as usize, q[1] as f64, q[2] as f64),
+        })
+        .collect();
+    let err = max_abs_diff(&got, &want);
+    assert!(err <= tol, "{what}: probe max error {err:e} > {tol:e}");
+    worst = worst.max(err);
+    eprintln!("{what}: {} levels, max |GPU − CPU| = {worst:.2e} (tolerance {tol:.2e})", cpu.layout.count());
+    pyr.destroy(ctx);
+}
+
+#[test]
+fn gpu_matches_cpu_stack_and_pyramid_modes() {
+    let ctx = gpu();
+    for mode in [PyramidMode::Stack, PyramidMode::Pyramid] {
+        for (w, h, k) in [(64, 64, 4), (97, 61, 4), (61, 97, 3), (97, 61, 1), (50, 33, 2), (128, 128, 4), (2, 2, 4), (3, 7, 5)] {
+            check(&ctx, w, h, k, mode, false);
+        }
+        check(&ctx, 64, 48, 4, mode, true);
+    }
+}
+
+#[test]
+fn layout_follows_the_paper() {
+    // 256², k_v = 4: 33 levels (thesis eq. 4.4, n = ls·log2(size) + 1); τ_{n_v−1} = 1 (eq. 14).
+    let l = PyramidLayout::new(256, 256, 4).unwrap();
+    assert_eq!(l.count(), 33);
+    assert_eq!((l.levels[4].width, l.levels[8].width, l.levels[32].width), (128, 64, 1));
+    assert!((l.tau(32) - 1.0).abs() < 1e-15 && (l.tau(0) - 1.0 / 256.0).abs() < 1e-15);
+    assert_eq!(PyramidLayout::new(97, 61, 1).unwrap().count(), 7);
+    assert!(PyramidLayout::new(97, 61, 0).is_err());
+    assert!(PyramidLayout::new(1, 61, 4).is_err());
+}
+
+#[test]
+fn memory_of_each_mode_at_512() {
+    let ctx = gpu();
+    let mut bytes = Vec::new();
+    for mode in [PyramidMode::Stack, PyramidMode::Pyramid] {
+        let p = HeightPyramid::new(&ctx, 512, 512, 4, mode, false).unwrap();
+        bytes.push(p.memory_bytes());
+        eprintln!(
+            "pyramid memory 512² k_v=4 ({} levels), {mode}: {} bytes ({:.2} MiB)",
+            p.layout().count(),
+            p.memory_bytes(),
+            p.memory_bytes() as f64 / (1 << 20) as f64
+        );
+        p.destroy(&ctx);
+    }
+    let ratio = bytes[0] as f64 / bytes[1] as f64;
+    eprintln!("pyramid memory 512²: stack / pyramid = {ratio:.1}×");
+    // n_v planes of N² against Σ N²·2^(−2i/k) ≈ N²/(1 − 2^(−1/2)) plus the levels the stack is built from.
+    assert!(ratio > 10.0, "ratio {ratio}");
+}
+
+#[test]
+fn stage_timer_names_the_pyramid_stages() {
+    let ctx = gpu();
+    let field = rough_field(64, 64, 7);
+    let pyr = HeightPyramid::new(&ctx, 64, 64, 4, PyramidMode::Stack, false).unwrap();
+    pyr.upload(&ctx, &field).unwrap();
+    let mut timer = StageTimer::new(&ctx, 16).unwrap();
+    let stages = ctx
+        .submit_and_wait(|cmd| {
+            let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
+            pyr.record(&mut rec);
+            Ok(rec.stages().to_vec())
+        })
+        .unwrap();
+    assert_eq!(stages, ["pyramid.decimate", "pyramid.synthesize"]);
+    assert!(timer.supported(), "lavapipe supports timestamps");
+    let t = timer.timings(&ctx).unwrap();
+    let names: Vec<_> = t.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["pyramid.decimate", "pyramid.synthesize"]);
+    assert!(t.iter().all(|(_, ms)| ms.is_finite() && *ms >= 0.0), "{t:?}");
+    eprintln!("timings ({}): {t:?}", ctx.info().name);
+    timer.destroy(&ctx);
+    pyr.destroy(&ctx);
+}
