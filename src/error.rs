@@ -22,29 +22,15 @@ pub enum Error {
 
     /// A height field whose size is outside `[2, max]` on either axis.
     #[error("{source_name}: height field is {width}×{height}; expected at least 2×2 and at most {max}×{max} (the device's maxImageDimension2D)")]
-    FieldSize {
-        source_name: String,
-        width: usize,
-        height: usize,
-        max: u32,
-    },
+    FieldSize { source_name: String, width: usize, height: usize, max: u32 },
 
     /// A non-finite value in a height field (or other numeric input).
     #[error("{source_name}: value {value} at (x={x}, y={y}) is not finite; expected finite heights")]
-    NonFinite {
-        source_name: String,
-        x: usize,
-        y: usize,
-        value: f32,
-    },
+    NonFinite { source_name: String, x: usize, y: usize, value: f32 },
 
     /// A parameter outside its valid range.
     #[error("invalid {name} = {value}: expected {expected}")]
-    InvalidParameter {
-        name: String,
-        value: String,
-        expected: String,
-    },
+    InvalidParameter { name: String, value: String, expected: String },
 
     /// A Vulkan call failed.
     #[error("Vulkan: {call} failed with {result:?}")]
@@ -60,11 +46,7 @@ pub enum Error {
 
     /// GPU memory allocation failed.
     #[error("GPU allocation '{name}' ({size} bytes) failed: {reason}")]
-    Allocation {
-        name: String,
-        size: u64,
-        reason: String,
-    },
+    Allocation { name: String, size: u64, reason: String },
 
     /// The device or queue cannot do what was asked (e.g. no timestamp support).
     #[error("unsupported: {0}")]

@@ -65,7 +65,9 @@ fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMod
 fn gpu_matches_cpu_stack_and_pyramid_modes() {
     let ctx = gpu();
     for mode in [PyramidMode::Stack, PyramidMode::Pyramid] {
-        for (w, h, k) in [(64, 64, 4), (97, 61, 4), (61, 97, 3), (97, 61, 1), (50, 33, 2), (128, 128, 4), (2, 2, 4), (3, 7, 5)] {
+        for (w, h, k) in
+            [(64, 64, 4), (97, 61, 4), (61, 97, 3), (97, 61, 1), (50, 33, 2), (128, 128, 4), (2, 2, 4), (3, 7, 5)]
+        {
             check(&ctx, w, h, k, mode, false);
         }
         check(&ctx, 64, 48, 4, mode, true);

@@ -95,7 +95,11 @@ impl PyramidLayout {
                 (((width as f64 * f).round() as usize).max(1), ((height as f64 * f).round() as usize).max(1))
             };
             if offset > u32::MAX as u64 {
-                return Err(Error::param("pyramid size", format!("{width}×{height}"), "fewer than 2^32 samples in all levels"));
+                return Err(Error::param(
+                    "pyramid size",
+                    format!("{width}×{height}"),
+                    "fewer than 2^32 samples in all levels",
+                ));
             }
             levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, pad: 0 });
             offset += (w * h) as u64;
@@ -152,14 +156,46 @@ impl HeightPyramid {
         let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
         let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
         let made = (|| -> Result<()> {
-            let lv = levels.insert(Buffer::new(ctx, "hfgi.pyramid.levels", layout.total * 4, storage, MemoryLocation::GpuOnly)?);
-            let tb = table.insert(Buffer::new(ctx, "hfgi.pyramid.table", (layout.count() * 16) as u64, storage, MemoryLocation::GpuOnly)?);
+            let lv = levels.insert(Buffer::new(
+                ctx,
+                "hfgi.pyramid.levels",
+                layout.total * 4,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?);
+            let tb = table.insert(Buffer::new(
+                ctx,
+                "hfgi.pyramid.table",
+                (layout.count() * 16) as u64,
+                storage,
+                MemoryLocation::GpuOnly,
+            )?);
             memory::upload(ctx, tb, 0, bytemuck::cast_slice(&layout.levels))?;
-            let d = decimate.insert(ComputePipeline::new(ctx, &shaders::PYRAMID_DECIMATE_COMP, &[DescriptorKind::StorageBuffer; 2], 16, &[], 1)?);
+            let d = decimate.insert(ComputePipeline::new(
+                ctx,
+                &shaders::PYRAMID_DECIMATE_COMP,
+                &[DescriptorKind::StorageBuffer; 2],
+                16,
+                &[],
+                1,
+            )?);
             sets.0 = d.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb)])?;
             if mode == PyramidMode::Stack {
-                let st = stack.insert(Buffer::new(ctx, "hfgi.pyramid.stack", stack_floats * 4, storage, MemoryLocation::GpuOnly)?);
-                let p = synthesize.insert(ComputePipeline::new(ctx, &shaders::PYRAMID_SYNTHESIZE_COMP, &[DescriptorKind::StorageBuffer; 3], 16, &[], 1)?);
+                let st = stack.insert(Buffer::new(
+                    ctx,
+                    "hfgi.pyramid.stack",
+                    stack_floats * 4,
+                    storage,
+                    MemoryLocation::GpuOnly,
+                )?);
+                let p = synthesize.insert(ComputePipeline::new(
+                    ctx,
+                    &shaders::PYRAMID_SYNTHESIZE_COMP,
+                    &[DescriptorKind::StorageBuffer; 3],
+                    16,
+                    &[],
+                    1,
+                )?);
                 sets.1 = p.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb), Bind::Buffer(st)])?;
             }
             Ok(())
@@ -269,7 +305,8 @@ impl HeightPyramid {
 
     /// Reads level `i` back (waits). For tests and pictures.
     pub fn read_level(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
-        let l = *self.layout.levels.get(i).ok_or_else(|| Error::param("level", i, format!("< {}", self.layout.count())))?;
+        let l =
+            *self.layout.levels.get(i).ok_or_else(|| Error::param("level", i, format!("< {}", self.layout.count())))?;
         memory::download_f32(ctx, &self.levels, l.offset as u64, (l.width * l.height) as u64)
     }
 
@@ -288,15 +325,18 @@ impl HeightPyramid {
     /// the GPU exactly as later passes do: bilinear on the stack, or B-spline on the fly.
     pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
         let q: Vec<[f32; 4]> = queries.iter().map(|q| [q[0], q[1], q[2], 0.0]).collect();
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
         let qb = Buffer::new(ctx, "hfgi.pyramid.probe.queries", (q.len() * 16) as u64, usage, MemoryLocation::GpuOnly)?;
-        let rb = match Buffer::new(ctx, "hfgi.pyramid.probe.result", (q.len() * 4) as u64, usage, MemoryLocation::GpuOnly) {
-            Ok(b) => b,
-            Err(e) => {
-                qb.destroy(ctx);
-                return Err(e);
-            }
-        };
+        let rb =
+            match Buffer::new(ctx, "hfgi.pyramid.probe.result", (q.len() * 4) as u64, usage, MemoryLocation::GpuOnly) {
+                Ok(b) => b,
+                Err(e) => {
+                    qb.destroy(ctx);
+                    return Err(e);
+                }
+            };
         let mut pipe: Option<ComputePipeline> = None;
         let r = (|| -> Result<Vec<f32>> {
             memory::upload(ctx, &qb, 0, bytemuck::cast_slice(&q))?;
@@ -311,7 +351,13 @@ impl HeightPyramid {
             let stack = self.stack.as_ref().unwrap_or(&self.levels);
             let set = p.allocate_set(
                 ctx,
-                &[Bind::Buffer(&self.levels), Bind::Buffer(&self.table), Bind::Buffer(stack), Bind::Buffer(&qb), Bind::Buffer(&rb)],
+                &[
+                    Bind::Buffer(&self.levels),
+                    Bind::Buffer(&self.table),
+                    Bind::Buffer(stack),
+                    Bind::Buffer(&qb),
+                    Bind::Buffer(&rb),
+                ],
             )?;
             let l0 = self.layout.levels[0];
             let push = PyramidPush {

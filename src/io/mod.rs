@@ -1,1 +1,3 @@
-//! Image output.
+//! Image output: OpenEXR layers and 8-bit PNG previews.
+pub mod exr;
+pub mod png;

@@ -32,7 +32,12 @@ impl HeightField {
             ));
         }
         if let Some(k) = data.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { source_name: source_name.to_string(), x: k % width, y: k / width, value: data[k] });
+            return Err(Error::NonFinite {
+                source_name: source_name.to_string(),
+                x: k % width,
+                y: k / width,
+                value: data[k],
+            });
         }
         Ok(Self { width, height, data })
     }

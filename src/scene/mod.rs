@@ -1,3 +1,5 @@
-//! Scenes and height fields.
+//! Scenes and height fields: the type, procedural generators and file loaders.
+pub mod generators;
 pub mod heightfield;
+pub mod load;
 pub use heightfield::HeightField;

@@ -129,8 +129,8 @@ impl Context {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
 
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
-        let exts =
-            unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
+        let exts = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
         let has_debug_utils =
             exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
         let mut layer_ptrs = Vec::new();
@@ -325,11 +325,12 @@ impl Context {
         let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let dname = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let dinfo = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        let valid_bits = if props.limits.timestamp_compute_and_graphics == vk::TRUE || props.limits.timestamp_period > 0.0 {
-            families.get(family as usize).map(|f| f.timestamp_valid_bits).unwrap_or(0)
-        } else {
-            0
-        };
+        let valid_bits =
+            if props.limits.timestamp_compute_and_graphics == vk::TRUE || props.limits.timestamp_period > 0.0 {
+                families.get(family as usize).map(|f| f.timestamp_valid_bits).unwrap_or(0)
+            } else {
+                0
+            };
         DeviceInfo {
             name,
             kind: props.device_type,
@@ -349,8 +350,9 @@ impl Context {
     pub fn list_devices() -> Result<Vec<(String, vk::PhysicalDeviceType)>> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
-        let instance = unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }
-            .vk("vkCreateInstance")?;
+        let instance =
+            unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }
+                .vk("vkCreateInstance")?;
         let out = unsafe { instance.enumerate_physical_devices() }.map(|ds| {
             ds.into_iter()
                 .map(|pd| {

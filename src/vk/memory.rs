@@ -139,9 +139,21 @@ impl Image {
                 return Err(e);
             }
         };
-        let mut img = Self { raw, view: vk::ImageView::null(), format, extent, samples, name: name.into(), alloc: Some(allocation) };
+        let mut img = Self {
+            raw,
+            view: vk::ImageView::null(),
+            format,
+            extent,
+            samples,
+            name: name.into(),
+            alloc: Some(allocation),
+        };
         let bound = unsafe {
-            d.bind_image_memory(raw, img.alloc.as_ref().map(|a| a.memory()).unwrap_or_default(), img.alloc.as_ref().map(|a| a.offset()).unwrap_or(0))
+            d.bind_image_memory(
+                raw,
+                img.alloc.as_ref().map(|a| a.memory()).unwrap_or_default(),
+                img.alloc.as_ref().map(|a| a.offset()).unwrap_or(0),
+            )
         };
         if let Err(e) = bound {
             img.destroy(ctx);
@@ -191,7 +203,13 @@ pub fn color_range() -> vk::ImageSubresourceRange {
 /// through a staging buffer, and waits. The copy is followed by a barrier making it visible to
 /// compute shaders.
 pub fn upload(ctx: &Context, dst: &Buffer, offset: u64, data: &[u8]) -> Result<()> {
-    let mut staging = Buffer::new(ctx, "hfgi.staging.upload", data.len() as u64, vk::BufferUsageFlags::TRANSFER_SRC, MemoryLocation::CpuToGpu)?;
+    let mut staging = Buffer::new(
+        ctx,
+        "hfgi.staging.upload",
+        data.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
     let r = staging.mapped().map(|m| m[..data.len()].copy_from_slice(data)).and_then(|_| {
         ctx.submit_and_wait(|cmd| {
             let region = [vk::BufferCopy::default().src_offset(0).dst_offset(offset).size(data.len() as u64)];
@@ -207,7 +225,8 @@ pub fn upload(ctx: &Context, dst: &Buffer, offset: u64, data: &[u8]) -> Result<(
 /// Reads `len` bytes from `src` (a buffer with TRANSFER_SRC usage) at byte `offset` and waits.
 /// Inserts a barrier that makes prior compute writes visible to the copy.
 pub fn download(ctx: &Context, src: &Buffer, offset: u64, len: u64) -> Result<Vec<u8>> {
-    let mut staging = Buffer::new(ctx, "hfgi.staging.download", len, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    let mut staging =
+        Buffer::new(ctx, "hfgi.staging.download", len, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
     let r = ctx
         .submit_and_wait(|cmd| {
             super::barrier::compute_to_transfer(ctx, cmd);

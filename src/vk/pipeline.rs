@@ -88,8 +88,9 @@ impl ComputePipeline {
                 pli = pli.push_constant_ranges(&ranges);
             }
             me.layout = unsafe { d.create_pipeline_layout(&pli, None) }.vk("vkCreatePipelineLayout")?;
-            let module = unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
-                .vk("vkCreateShaderModule")?;
+            let module =
+                unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
+                    .vk("vkCreateShaderModule")?;
             let entries: Vec<_> = spec
                 .iter()
                 .enumerate()
@@ -164,7 +165,10 @@ impl ComputePipeline {
             .iter()
             .enumerate()
             .map(|(i, b)| {
-                let w = vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32).descriptor_type(self.kinds[i].raw());
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(self.kinds[i].raw());
                 match b {
                     Bind::Buffer(_) => w.buffer_info(&buffer_infos[i]),
                     Bind::Image(_) => w.image_info(&image_infos[i]),
@@ -177,7 +181,14 @@ impl ComputePipeline {
 
     /// Binds the pipeline and `set`, pushes `push` (must be `push_size` bytes) and dispatches
     /// `groups` workgroups.
-    pub fn dispatch(&self, ctx: &Context, cmd: vk::CommandBuffer, set: vk::DescriptorSet, push: &[u8], groups: [u32; 3]) {
+    pub fn dispatch(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        set: vk::DescriptorSet,
+        push: &[u8],
+        groups: [u32; 3],
+    ) {
         debug_assert_eq!(push.len() as u32, self.push_size, "{}: push-constant size", self.name);
         let d = ctx.device();
         unsafe {

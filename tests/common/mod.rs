@@ -65,7 +65,9 @@ pub fn max_abs_diff(a: &[f32], b: &[f64]) -> f64 {
 /// A deterministic rough test field: a few sines plus hashed value noise.
 pub fn rough_field(w: usize, h: usize, seed: u32) -> hfgi::scene::HeightField {
     let hash = |x: usize, y: usize| {
-        let mut v = (x as u32).wrapping_mul(0x9E37_79B1) ^ (y as u32).wrapping_mul(0x85EB_CA77) ^ seed.wrapping_mul(0xC2B2_AE3D);
+        let mut v = (x as u32).wrapping_mul(0x9E37_79B1)
+            ^ (y as u32).wrapping_mul(0x85EB_CA77)
+            ^ seed.wrapping_mul(0xC2B2_AE3D);
         v ^= v >> 15;
         v = v.wrapping_mul(0x2C1B_3C6D);
         v ^= v >> 12;

@@ -5,8 +5,7 @@ fn main() {
     if std::env::var_os("CARGO_FEATURE_FROM_SOURCE").is_some() {
         return;
     }
-    let dir = std::env::var("SHADERC_LIB_DIR")
-        .unwrap_or_else(|_| "/usr/lib/x86_64-linux-gnu".to_string());
+    let dir = std::env::var("SHADERC_LIB_DIR").unwrap_or_else(|_| "/usr/lib/x86_64-linux-gnu".to_string());
     println!("cargo:rustc-link-search=native={dir}");
     // Order matters for static archives: dependents first.
     for lib in [

@@ -123,7 +123,11 @@ fn render(a: RenderArgs) -> Result<()> {
     })?;
     match timer.timings(&ctx) {
         Ok(t) => {
-            let label = if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU { " (lavapipe: CPU time, not a GPU time)" } else { "" };
+            let label = if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
+                " (lavapipe: CPU time, not a GPU time)"
+            } else {
+                ""
+            };
             for (stage, ms) in t {
                 eprintln!("  {stage:<24} {ms:9.3} ms{label}");
             }
@@ -206,7 +210,11 @@ fn devices() -> Result<()> {
         i.api_version.1,
         i.api_version.2,
         i.max_image_dimension_2d,
-        if i.timestamp_valid_bits > 0 { format!("{} bits, {} ns/tick", i.timestamp_valid_bits, i.timestamp_period) } else { "none".into() }
+        if i.timestamp_valid_bits > 0 {
+            format!("{} bits, {} ns/tick", i.timestamp_valid_bits, i.timestamp_period)
+        } else {
+            "none".into()
+        }
     );
     Ok(())
 }
@@ -217,7 +225,8 @@ fn spirv(out: &Path) -> Result<()> {
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
-        std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(s.words)).with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(s.words))
+            .with_context(|| format!("writing {}", path.display()))?;
         println!("{}", path.display());
     }
     Ok(())

@@ -23,10 +23,7 @@ fn stage_of(path: &Path) -> Result<shaderc::ShaderKind, String> {
         Some("comp") => Ok(shaderc::ShaderKind::Compute),
         Some("vert") => Ok(shaderc::ShaderKind::Vertex),
         Some("frag") => Ok(shaderc::ShaderKind::Fragment),
-        _ => Err(format!(
-            "{}: shader file names must end in .comp.glsl, .vert.glsl or .frag.glsl",
-            path.display()
-        )),
+        _ => Err(format!("{}: shader file names must end in .comp.glsl, .vert.glsl or .frag.glsl", path.display())),
     }
 }
 
@@ -69,10 +66,7 @@ pub fn compile_tree(root: &Path) -> Result<Vec<Compiled>, String> {
             let from_dir = Path::new(from).parent().map(Path::to_path_buf).unwrap_or_default();
             for cand in [inc.join(name), from_dir.join(name)] {
                 if let Ok(content) = std::fs::read_to_string(&cand) {
-                    return Ok(shaderc::ResolvedInclude {
-                        resolved_name: cand.display().to_string(),
-                        content,
-                    });
+                    return Ok(shaderc::ResolvedInclude { resolved_name: cand.display().to_string(), content });
                 }
             }
             Err(format!("#include \"{name}\" not found in {} or beside {from}", inc.display()))

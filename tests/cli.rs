@@ -1,0 +1,50 @@
+//! The command line documents every command and option, and reports bad input with context.
+
+use std::process::Command;
+
+fn hfgi(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hfgi")).args(args).output().expect("run hfgi");
+    (out.status.success(), format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr)))
+}
+
+#[test]
+fn help_documents_every_command_and_option() {
+    let (ok, top) = hfgi(&["--help"]);
+    assert!(ok, "{top}");
+    for cmd in ["render", "devices", "spirv", "HFGI_DEVICE", "HFGI_VALIDATION"] {
+        assert!(top.contains(cmd), "`hfgi --help` does not mention {cmd}:\n{top}");
+    }
+    let (ok, render) = hfgi(&["render", "--help"]);
+    assert!(ok, "{render}");
+    for opt in [
+        "--out",
+        "--heights",
+        "--generator",
+        "--size",
+        "--raw-size",
+        "--height-scale",
+        "--level-step",
+        "--pyramid",
+        "--wrap",
+        "--device",
+        "--validation",
+    ] {
+        assert!(render.contains(opt), "`hfgi render --help` does not document {opt}:\n{render}");
+    }
+    let (ok, spirv) = hfgi(&["spirv", "--help"]);
+    assert!(ok && spirv.contains("--out"), "{spirv}");
+    let (ok, devices) = hfgi(&["devices", "--help"]);
+    assert!(ok && devices.contains("Vulkan devices"), "{devices}");
+}
+
+#[test]
+fn bad_input_is_an_error_with_context_not_a_panic() {
+    let (ok, msg) = hfgi(&["render", "--heights", "/nonexistent/field.png", "--out", "/tmp/hfgi-cli-test"]);
+    assert!(!ok);
+    assert!(msg.contains("/nonexistent/field.png") && !msg.contains("panicked"), "{msg}");
+    let (ok, msg) = hfgi(&["render", "--size", "1x1", "--out", "/tmp/hfgi-cli-test"]);
+    assert!(!ok);
+    assert!(msg.contains("1×1") && !msg.contains("panicked"), "{msg}");
+    let (ok, msg) = hfgi(&["render", "--pyramid", "tower", "--out", "/tmp/hfgi-cli-test"]);
+    assert!(!ok && msg.contains("tower") && msg.contains("stack"), "{msg}");
+}
