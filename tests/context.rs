@@ -8,7 +8,7 @@ use hfgi::vk::{Context, ContextOptions, RawHandles, Recorder};
 
 fn run_pyramid(ctx: &Context) -> Vec<f32> {
     let field = common::rough_field(40, 30, 3);
-    let pyr = HeightPyramid::new(ctx, 40, 30, 4, PyramidMode::Pyramid, false).unwrap();
+    let pyr = HeightPyramid::new(ctx, 40, 30, (40, 30), 4, PyramidMode::Pyramid, false).unwrap();
     pyr.upload(ctx, &field).unwrap();
     ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(ctx, cmd, None);

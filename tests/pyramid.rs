@@ -8,11 +8,12 @@ use hfgi::frame::pyramid::{HeightPyramid, PyramidLayout, PyramidMode};
 use hfgi::reference::pyramid::CpuPyramid;
 use hfgi::vk::{Recorder, StageTimer};
 
-fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMode, wrap: bool) {
+fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMode, wrap: bool, sub: usize) {
+    let work = (w.div_ceil(sub).max(2), h.div_ceil(sub).max(2));
     let field = rough_field(w, h, (w * 31 + h + k_v as usize) as u32);
     let (lo, hi) = field.range();
     let tol = 1e-4 * (hi - lo) as f64;
-    let pyr = HeightPyramid::new(ctx, w, h, k_v, mode, wrap).unwrap();
+    let pyr = HeightPyramid::new(ctx, w, h, work, k_v, mode, wrap).unwrap();
     pyr.upload(ctx, &field).unwrap();
     ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(ctx, cmd, None);
@@ -20,8 +21,8 @@ fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMod
         Ok(())
     })
     .unwrap();
-    let cpu = CpuPyramid::build(&field, k_v, wrap, mode == PyramidMode::Stack).unwrap();
-    let what = format!("{w}×{h} k_v={k_v} {mode} wrap={wrap}");
+    let cpu = CpuPyramid::build(&field, work, k_v, wrap, mode == PyramidMode::Stack).unwrap();
+    let what = format!("{w}×{h} k_v={k_v} {mode} wrap={wrap} work={work:?}");
     assert_eq!(pyr.layout(), &cpu.layout, "{what}: layouts differ");
     let mut worst = 0.0f64;
     for i in 0..cpu.layout.count() {
@@ -68,9 +69,11 @@ fn gpu_matches_cpu_stack_and_pyramid_modes() {
         for (w, h, k) in
             [(64, 64, 4), (97, 61, 4), (61, 97, 3), (97, 61, 1), (50, 33, 2), (128, 128, 4), (2, 2, 4), (3, 7, 5)]
         {
-            check(&ctx, w, h, k, mode, false);
+            check(&ctx, w, h, k, mode, false, 1);
         }
-        check(&ctx, 64, 48, 4, mode, true);
+        check(&ctx, 64, 48, 4, mode, true, 1);
+        check(&ctx, 97, 61, 4, mode, false, 2);
+        check(&ctx, 64, 64, 3, mode, true, 4);
     }
 }
 
@@ -91,7 +94,7 @@ fn memory_of_each_mode_at_512() {
     let ctx = gpu();
     let mut bytes = Vec::new();
     for mode in [PyramidMode::Stack, PyramidMode::Pyramid] {
-        let p = HeightPyramid::new(&ctx, 512, 512, 4, mode, false).unwrap();
+        let p = HeightPyramid::new(&ctx, 512, 512, (512, 512), 4, mode, false).unwrap();
         bytes.push(p.memory_bytes());
         eprintln!(
             "pyramid memory 512² k_v=4 ({} levels), {mode}: {} bytes ({:.2} MiB)",
@@ -111,7 +114,7 @@ fn memory_of_each_mode_at_512() {
 fn stage_timer_names_the_pyramid_stages() {
     let ctx = gpu();
     let field = rough_field(64, 64, 7);
-    let pyr = HeightPyramid::new(&ctx, 64, 64, 4, PyramidMode::Stack, false).unwrap();
+    let pyr = HeightPyramid::new(&ctx, 64, 64, (64, 64), 4, PyramidMode::Stack, false).unwrap();
     pyr.upload(&ctx, &field).unwrap();
     let mut timer = StageTimer::new(&ctx, 16).unwrap();
     let stages = ctx

@@ -17,8 +17,6 @@
 //! Before it, the caller's writes to level 0 (by transfer or compute) are made visible by a
 //! barrier the pass records itself.
 
-use std::str::FromStr;
-
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -33,35 +31,7 @@ use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKin
 pub const STAGE_DECIMATE: &str = "pyramid.decimate";
 pub const STAGE_SYNTHESIZE: &str = "pyramid.synthesize";
 
-/// How the pyramid is stored and sampled (scene key `gi.pyramid`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum PyramidMode {
-    /// Every level B-spline-synthesized to the working resolution (NS09 §9).
-    #[default]
-    Stack,
-    /// Decimated levels only, B-spline filtered on the fly (NS09 §10).
-    Pyramid,
-}
-
-impl FromStr for PyramidMode {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "stack" => Ok(Self::Stack),
-            "pyramid" => Ok(Self::Pyramid),
-            _ => Err(Error::param("pyramid mode", s, "`stack` or `pyramid`")),
-        }
-    }
-}
-
-impl std::fmt::Display for PyramidMode {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Self::Stack => "stack",
-            Self::Pyramid => "pyramid",
-        })
-    }
-}
+pub use crate::scene::model::PyramidMode;
 
 /// Sizes and buffer offsets of every level.
 #[derive(Clone, Debug, PartialEq)]
@@ -123,6 +93,7 @@ pub struct HeightPyramid {
     layout: PyramidLayout,
     mode: PyramidMode,
     wrap: bool,
+    work: (u32, u32),
     levels: Buffer,
     table: Buffer,
     stack: Option<Buffer>,
@@ -133,8 +104,18 @@ pub struct HeightPyramid {
 }
 
 impl HeightPyramid {
-    /// Allocates the buffers and pipelines for a `width × height` field.
-    pub fn new(ctx: &Context, width: usize, height: usize, k_v: u32, mode: PyramidMode, wrap: bool) -> Result<Self> {
+    /// Allocates the buffers and pipelines for a `width × height` field whose stack (stack mode)
+    /// is synthesized at the working resolution `work` (the visibility grid; `(width, height)`
+    /// without sub-sampling).
+    pub fn new(
+        ctx: &Context,
+        width: usize,
+        height: usize,
+        work: (usize, usize),
+        k_v: u32,
+        mode: PyramidMode,
+        wrap: bool,
+    ) -> Result<Self> {
         let layout = PyramidLayout::new(width, height, k_v)?;
         let max = ctx.info().max_image_dimension_2d as usize;
         if width > max || height > max {
@@ -143,7 +124,10 @@ impl HeightPyramid {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
-        let plane = (width * height) as u64;
+        if work.0 < 2 || work.1 < 2 || work.0 > width.max(2) || work.1 > height.max(2) {
+            return Err(Error::param("working resolution", format!("{}×{}", work.0, work.1), format!("2×2 up to {width}×{height}")));
+        }
+        let plane = (work.0 * work.1) as u64;
         let stack_floats = plane * layout.count() as u64;
         if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
             return Err(Error::param(
@@ -205,6 +189,7 @@ impl HeightPyramid {
                 layout,
                 mode,
                 wrap,
+                work: (work.0 as u32, work.1 as u32),
                 levels,
                 table,
                 stack,
@@ -262,14 +247,14 @@ impl HeightPyramid {
         });
         if let Some(p) = &self.synthesize {
             rec.scope(STAGE_SYNTHESIZE, |ctx, cmd| {
-                let l0 = layout.levels[0];
-                let push = PyramidPush { level: 0, wrap, out_width: l0.width, out_height: l0.height };
+                let (ww, wh) = self.work;
+                let push = PyramidPush { level: 0, wrap, out_width: ww, out_height: wh };
                 p.dispatch(
                     ctx,
                     cmd,
                     self.synthesize_set,
                     bytemuck::bytes_of(&push),
-                    [groups(l0.width, 8), groups(l0.height, 8), layout.count() as u32],
+                    [groups(ww, 8), groups(wh, 8), layout.count() as u32],
                 );
                 barrier::compute_to_compute(ctx, cmd);
             });
@@ -285,6 +270,10 @@ impl HeightPyramid {
     pub fn wrap(&self) -> bool {
         self.wrap
     }
+    /// Working resolution of the stack (and of the visibility grid).
+    pub fn work(&self) -> (u32, u32) {
+        self.work
+    }
     /// All decimated levels, packed (see [`PyramidLayout`]). Level 0 is the input.
     pub fn levels_buffer(&self) -> &Buffer {
         &self.levels
@@ -293,7 +282,7 @@ impl HeightPyramid {
     pub fn table_buffer(&self) -> &Buffer {
         &self.table
     }
-    /// The synthesized stack (`n_v` planes at the working resolution), in stack mode.
+    /// The synthesized stack (`n_v` planes of `work()` size, row-major), in stack mode.
     pub fn stack_buffer(&self) -> Option<&Buffer> {
         self.stack.as_ref()
     }
@@ -316,13 +305,12 @@ impl HeightPyramid {
         if i >= self.layout.count() {
             return Err(Error::param("level", i, format!("< {}", self.layout.count())));
         }
-        let l0 = self.layout.levels[0];
-        let plane = (l0.width * l0.height) as u64;
+        let plane = (self.work.0 * self.work.1) as u64;
         memory::download_f32(ctx, s, i as u64 * plane, plane)
     }
 
-    /// Samples the pyramid at `(level, x, y)` queries (x, y in working-resolution texels) on
-    /// the GPU exactly as later passes do: bilinear on the stack, or B-spline on the fly.
+    /// Samples the pyramid at `(level, x, y)` queries (x, y in level-0 texel units) on the GPU
+    /// exactly as the scanning passes do: bilinear on the stack, or B-spline on the fly.
     pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
         let q: Vec<[f32; 4]> = queries.iter().map(|q| [q[0], q[1], q[2], 0.0]).collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
@@ -359,12 +347,11 @@ impl HeightPyramid {
                     Bind::Buffer(&rb),
                 ],
             )?;
-            let l0 = self.layout.levels[0];
             let push = PyramidPush {
                 level: (self.mode == PyramidMode::Pyramid) as u32,
                 wrap: self.wrap as u32,
-                out_width: l0.width,
-                out_height: l0.height,
+                out_width: self.work.0,
+                out_height: self.work.1,
             };
             ctx.submit_and_wait(|cmd| {
                 barrier::compute_to_compute(ctx, cmd);

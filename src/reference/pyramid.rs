@@ -13,8 +13,10 @@ pub struct CpuPyramid {
     pub wrap: bool,
     /// `levels[i]`: level `i`, row-major.
     pub levels: Vec<Vec<f64>>,
-    /// `stack[i]`: level `i` B-spline-resampled to the level-0 resolution.
+    /// `stack[i]`: level `i` B-spline-resampled to the working resolution `work`.
     pub stack: Option<Vec<Vec<f64>>>,
+    /// Working resolution of the stack.
+    pub work: (usize, usize),
 }
 
 fn address(p: i64, n: usize, wrap: bool) -> usize {
@@ -62,8 +64,8 @@ pub fn rescale(p: f64, from: usize, to: usize) -> f64 {
 }
 
 impl CpuPyramid {
-    /// Builds every level; with `synthesize`, also the stack.
-    pub fn build(field: &HeightField, k_v: u32, wrap: bool, synthesize: bool) -> Result<Self> {
+    /// Builds every level; with `synthesize`, also the stack at working resolution `work`.
+    pub fn build(field: &HeightField, work: (usize, usize), k_v: u32, wrap: bool, synthesize: bool) -> Result<Self> {
         let layout = PyramidLayout::new(field.width(), field.height(), k_v)?;
         let mut levels: Vec<Vec<f64>> = vec![field.data().iter().map(|&v| v as f64).collect()];
         for i in 1..layout.count() {
@@ -80,15 +82,17 @@ impl CpuPyramid {
             }
             levels.push(out);
         }
-        let mut me = Self { layout, wrap, levels, stack: None };
+        let mut me = Self { layout, wrap, levels, stack: None, work };
         if synthesize {
             let (w, h) = (field.width(), field.height());
+            let (ww, wh) = work;
             let stack = (0..me.layout.count())
                 .map(|i| {
-                    let mut plane = vec![0.0; w * h];
-                    for y in 0..h {
-                        for x in 0..w {
-                            plane[y * w + x] = me.sample_pyramid(i, x as f64, y as f64);
+                    let mut plane = vec![0.0; ww * wh];
+                    for y in 0..wh {
+                        for x in 0..ww {
+                            let (x0, y0) = (rescale(x as f64, ww, w), rescale(y as f64, wh, h));
+                            plane[y * ww + x] = me.sample_pyramid(i, x0, y0);
                         }
                     }
                     plane
@@ -109,10 +113,18 @@ impl CpuPyramid {
         bspline(&self.levels[i], w, h, lx, ly, self.wrap)
     }
 
-    /// Stack sampling: bilinear on stack plane `i` at `(x, y)` in level-0 texel units.
-    /// `None` if the stack was not built.
+    /// Stack sampling: bilinear on stack plane `i` at `(x, y)` in level-0 texel units (mapped
+    /// to the working grid). `None` if the stack was not built.
     pub fn sample_stack(&self, i: usize, x: f64, y: f64) -> Option<f64> {
         let l0 = self.layout.levels[0];
-        self.stack.as_ref().map(|s| bilinear(&s[i], l0.width as usize, l0.height as usize, x, y, self.wrap))
+        let (ww, wh) = self.work;
+        let (xw, yw) = (rescale(x, l0.width as usize, ww), rescale(y, l0.height as usize, wh));
+        self.stack.as_ref().map(|s| bilinear(&s[i], ww, wh, xw, yw, self.wrap))
+    }
+
+    /// Height at level `i`, `(x, y)` in level-0 texel units, as the scanning passes read it:
+    /// the stack when it was built, the B-spline on the fly otherwise.
+    pub fn height_at(&self, i: usize, x: f64, y: f64) -> f64 {
+        self.sample_stack(i, x, y).unwrap_or_else(|| self.sample_pyramid(i, x, y))
     }
 }

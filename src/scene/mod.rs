@@ -2,4 +2,5 @@
 pub mod generators;
 pub mod heightfield;
 pub mod load;
+pub mod model;
 pub use heightfield::HeightField;

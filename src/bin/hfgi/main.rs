@@ -113,7 +113,7 @@ fn render(a: RenderArgs) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     eprintln!("device: {} ({}), field {w}×{h}, k_v = {}, {mode}", ctx.info().name, ctx.info().driver, a.level_step);
 
-    let pyr = HeightPyramid::new(&ctx, w, h, a.level_step, mode, a.wrap).context("creating the height pyramid")?;
+    let pyr = HeightPyramid::new(&ctx, w, h, (w, h), a.level_step, mode, a.wrap).context("creating the height pyramid")?;
     pyr.upload(&ctx, &field)?;
     let mut timer = StageTimer::new(&ctx, 32)?;
     ctx.submit_and_wait(|cmd| {
