@@ -32,6 +32,13 @@ pub enum Error {
     #[error("invalid {name} = {value}: expected {expected}")]
     InvalidParameter { name: String, value: String, expected: String },
 
+    /// An invalid scene file or `--set` override (`scene::file`): `file` is the scene file's
+    /// name, `key` the offending key path (`gi.azimuths`, `key_light.0.radiance`; `None` for a
+    /// TOML syntax error or a malformed override) and `message` says what was found and what is
+    /// valid.
+    #[error("{file}: {message}")]
+    SceneFile { file: String, key: Option<String>, message: String },
+
     /// A Vulkan call failed.
     #[error("Vulkan: {call} failed with {result:?}")]
     Vulkan { call: &'static str, result: vk::Result },

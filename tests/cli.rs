@@ -11,11 +11,16 @@ fn hfgi(args: &[&str]) -> (bool, String) {
 fn help_documents_every_command_and_option() {
     let (ok, top) = hfgi(&["--help"]);
     assert!(ok, "{top}");
-    for cmd in ["render", "devices", "spirv", "HFGI_DEVICE", "HFGI_VALIDATION"] {
+    for cmd in ["render", "pyramid", "devices", "spirv", "HFGI_DEVICE", "HFGI_VALIDATION"] {
         assert!(top.contains(cmd), "`hfgi --help` does not mention {cmd}:\n{top}");
     }
     let (ok, render) = hfgi(&["render", "--help"]);
     assert!(ok, "{render}");
+    for opt in ["[SCENE]", "--set", "--out", "--shading-exr", "--exposure", "--device", "--validation"] {
+        assert!(render.contains(opt), "`hfgi render --help` does not document {opt}:\n{render}");
+    }
+    let (ok, pyramid) = hfgi(&["pyramid", "--help"]);
+    assert!(ok, "{pyramid}");
     for opt in [
         "--out",
         "--heights",
@@ -29,7 +34,7 @@ fn help_documents_every_command_and_option() {
         "--device",
         "--validation",
     ] {
-        assert!(render.contains(opt), "`hfgi render --help` does not document {opt}:\n{render}");
+        assert!(pyramid.contains(opt), "`hfgi pyramid --help` does not document {opt}:\n{pyramid}");
     }
     let (ok, spirv) = hfgi(&["spirv", "--help"]);
     assert!(ok && spirv.contains("--out"), "{spirv}");
@@ -39,12 +44,16 @@ fn help_documents_every_command_and_option() {
 
 #[test]
 fn bad_input_is_an_error_with_context_not_a_panic() {
-    let (ok, msg) = hfgi(&["render", "--heights", "/nonexistent/field.png", "--out", "/tmp/hfgi-cli-test"]);
+    let (ok, msg) = hfgi(&["pyramid", "--heights", "/nonexistent/field.png", "--out", "/tmp/hfgi-cli-test"]);
     assert!(!ok);
     assert!(msg.contains("/nonexistent/field.png") && !msg.contains("panicked"), "{msg}");
-    let (ok, msg) = hfgi(&["render", "--size", "1x1", "--out", "/tmp/hfgi-cli-test"]);
+    let (ok, msg) = hfgi(&["pyramid", "--size", "1x1", "--out", "/tmp/hfgi-cli-test"]);
     assert!(!ok);
     assert!(msg.contains("1×1") && !msg.contains("panicked"), "{msg}");
-    let (ok, msg) = hfgi(&["render", "--pyramid", "tower", "--out", "/tmp/hfgi-cli-test"]);
+    let (ok, msg) = hfgi(&["pyramid", "--pyramid", "tower", "--out", "/tmp/hfgi-cli-test"]);
     assert!(!ok && msg.contains("tower") && msg.contains("stack"), "{msg}");
+    let (ok, msg) = hfgi(&["render", "--set", "gi.azimuths=2", "--out", "/tmp/hfgi-cli-test/x.png"]);
+    assert!(!ok && msg.contains("gi.azimuths") && msg.contains('2') && !msg.contains("panicked"), "{msg}");
+    let (ok, msg) = hfgi(&["render", "/nonexistent/scene.toml"]);
+    assert!(!ok && msg.contains("/nonexistent/scene.toml") && !msg.contains("panicked"), "{msg}");
 }

@@ -32,4 +32,10 @@ float hfgi_height_at(uint level, vec2 p0, uvec2 work, bool stack_mode, bool wrap
     return hfgi_bspline_at(l, hfgi_rescale(p0, n0, l), wrap);
 }
 
+// Pyramid level read by scan sample i (NS09 §5.2 level offset; docs/direct.md §2): the level
+// whose texel matches the step t_i, biased k·o levels finer ("sharper long-range shadows").
+uint hfgi_scan_level(int i, uint bias) {
+    return uint(max(i - int(bias), 0));
+}
+
 #endif

@@ -20,4 +20,39 @@ struct hfgi_PyramidPush {
     uint out_height;
 };
 
+// Push constants of the visibility pass (one dispatch per light set). 48 bytes.
+struct hfgi_VisibilityPush {
+    uint sample_offset; // first azimuth sample of the set in the samples / A-matrix buffers
+    uint sample_count;
+    uint out_offset;    // first float of the set's V vectors in the output buffer
+    uint wrap;
+    uint work_width;    // receiver grid (working resolution)
+    uint work_height;
+    uint level_step;    // k_v
+    uint level_bias;    // k_v * o_v: scan sample i reads level max(i - level_bias, 0)
+    float texel_size;   // world units per texel
+    uint stack_mode;    // 1: stack, 0: true pyramid
+    uint pad0;
+    uint pad1;
+};
+
+// Push constants of the direct shading pass. 96 bytes.
+struct hfgi_ShadePush {
+    uint width;         // full resolution
+    uint height;
+    uint work_width;    // receiver grid
+    uint work_height;
+    uint set_count;     // light sets (environment, key lights)
+    uint wrap;
+    uint glossy;        // 1: material has a Phong lobe
+    uint albedo_map;    // 1: per-texel albedo buffer
+    float texel_size;
+    float pad0;
+    float pad1;
+    float pad2;
+    vec4 camera;        // world position of the camera (xyz)
+    vec4 specular;      // Phong k_s (rgb)
+    vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
+};
+
 #endif

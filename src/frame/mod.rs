@@ -3,4 +3,9 @@
 //! [`crate::reference`].
 
 pub mod pyramid;
+pub mod renderer;
+pub mod shade;
 pub mod shared;
+pub mod visibility;
+
+pub use renderer::{Renderer, ShadingLayers};

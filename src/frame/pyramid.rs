@@ -125,7 +125,11 @@ impl HeightPyramid {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         if work.0 < 2 || work.1 < 2 || work.0 > width.max(2) || work.1 > height.max(2) {
-            return Err(Error::param("working resolution", format!("{}×{}", work.0, work.1), format!("2×2 up to {width}×{height}")));
+            return Err(Error::param(
+                "working resolution",
+                format!("{}×{}", work.0, work.1),
+                format!("2×2 up to {width}×{height}"),
+            ));
         }
         let plane = (work.0 * work.1) as u64;
         let stack_floats = plane * layout.count() as u64;

@@ -5,6 +5,7 @@
 //! `k = l(l+1) + m`; normalised Legendre polynomials `P̂_l(z) = sqrt((2l+1)/2)·P_l(z)`.
 //! Equation numbers refer to Nowrouzezahrai & Snyder, "Fast Global Illumination on Dynamic
 //! Height Fields", EGSR 2009.
+pub mod azimuth;
 pub mod bspline;
 pub mod legendre;
 pub mod nlp;

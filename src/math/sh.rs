@@ -18,7 +18,7 @@ pub fn index(l: i32, m: i32) -> usize {
 }
 
 /// `K_l^m = sqrt((2l+1)/(4π) · (l−m)!/(l+m)!)` for `0 ≤ m ≤ l`.
-pub(crate) fn k_lm(l: usize, m: usize) -> f64 {
+pub fn k_lm(l: usize, m: usize) -> f64 {
     let mut ratio = 1.0;
     for k in (l - m + 1)..=(l + m) {
         ratio /= k as f64;

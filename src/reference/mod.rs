@@ -1,3 +1,4 @@
 //! CPU (f64) twins of the GPU stages, same algorithm and parameters, used by the tests.
 
+pub mod direct;
 pub mod pyramid;

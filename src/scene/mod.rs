@@ -1,4 +1,6 @@
 //! Scenes and height fields: the type, procedural generators and file loaders.
+pub mod envmap;
+pub mod file;
 pub mod generators;
 pub mod heightfield;
 pub mod load;

@@ -177,7 +177,7 @@ impl Camera {
             fov_deg: 40.0,
             width: 960,
             height: 540,
-            exposure: 0.0,
+            exposure: -1.5,
         }
     }
 }

@@ -5,6 +5,8 @@
 //! print how many contexts were checked and how many messages appeared.
 #![allow(dead_code)]
 
+pub mod scenes;
+
 use std::io::Write;
 use std::ops::Deref;
 use std::sync::{Arc, Mutex};

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use hfgi::frame::pyramid::{HeightPyramid, PyramidMode};
+use hfgi::frame::Renderer;
 use hfgi::scene::generators::Generator;
 use hfgi::scene::load::{load_heightfield, LoadOptions};
 use hfgi::scene::HeightField;
@@ -24,12 +25,15 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render the default scene (or a given height field) and write images to --out.
+    /// Render a scene file (or the default scene) and write the view image.
     ///
-    /// For now this writes the height field and its pyramid levels: heights.png / heights.exr,
-    /// pyramid.png (a contact sheet of levels, B-spline resampled to full resolution) and
-    /// pyramid.exr (one layer per level), and prints per-stage GPU timings and memory.
+    /// Writes the view image (PNG; until the camera pass exists it is the tone-mapped shading
+    /// texture), and with --shading-exr the per-texel shading texture with float32 layers
+    /// `direct`, `indirect`, `glossy` and the total in R, G, B (docs/conventions.md). Prints the
+    /// per-stage GPU timings and memory. Scene format: docs/scene-format.md.
     Render(RenderArgs),
+    /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
+    Pyramid(PyramidArgs),
     /// List the Vulkan devices and which one hfgi would choose.
     Devices,
     /// Write the embedded SPIR-V of every shader to a folder (for hosts building their own pipelines).
@@ -41,7 +45,40 @@ enum Command {
 }
 
 #[derive(Args)]
+struct DeviceArgs {
+    /// Vulkan device name substring (overrides HFGI_DEVICE).
+    #[arg(long)]
+    device: Option<String>,
+    /// Enable the Vulkan validation layer and fail on any message.
+    #[arg(long)]
+    validation: bool,
+}
+
+#[derive(Args)]
 struct RenderArgs {
+    /// Scene file (TOML, docs/scene-format.md). Without it, the default scene.
+    scene: Option<PathBuf>,
+    /// Override a scene setting, e.g. `--set gi.azimuths=64 --set material.albedo=[0.5,0.5,0.5]`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// View image (PNG).
+    #[arg(long, default_value = "out/render.png")]
+    out: PathBuf,
+    /// Also write the shading texture as a layered float32 EXR.
+    #[arg(long, value_name = "FILE")]
+    shading_exr: Option<PathBuf>,
+    /// Also write the height field as a grey PNG (black = lowest, white = highest).
+    #[arg(long, value_name = "FILE")]
+    heights_png: Option<PathBuf>,
+    /// Exposure in stops for the PNG (default: the scene camera's), e.g. `--exposure=-1.5`.
+    #[arg(long, allow_hyphen_values = true)]
+    exposure: Option<f32>,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct PyramidArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -70,12 +107,8 @@ struct RenderArgs {
     /// Treat the field as periodic.
     #[arg(long)]
     wrap: bool,
-    /// Vulkan device name substring (overrides HFGI_DEVICE).
-    #[arg(long)]
-    device: Option<String>,
-    /// Enable the Vulkan validation layer and fail on any message.
-    #[arg(long)]
-    validation: bool,
+    #[command(flatten)]
+    device: DeviceArgs,
 }
 
 fn parse_size(s: &str, what: &str) -> Result<(usize, usize)> {
@@ -89,12 +122,96 @@ fn parse_size(s: &str, what: &str) -> Result<(usize, usize)> {
     }
 }
 
-fn context(device: Option<String>, validation: bool) -> Result<Context> {
-    let opts = ContextOptions { validation: validation.then_some(true), device_filter: device };
+fn context(d: &DeviceArgs) -> Result<Context> {
+    let opts = ContextOptions { validation: d.validation.then_some(true), device_filter: d.device.clone() };
     Context::headless_with(&opts).context("creating the Vulkan context")
 }
 
-fn load_field(a: &RenderArgs, max_dim: u32) -> Result<HeightField> {
+fn print_timings(ctx: &Context, timer: &StageTimer) {
+    match timer.timings(ctx) {
+        Ok(t) => {
+            let lavapipe = ctx.info().kind == ash::vk::PhysicalDeviceType::CPU;
+            let label = if lavapipe { " (lavapipe: CPU time, not a GPU time)" } else { "" };
+            for (stage, ms) in t {
+                eprintln!("  {stage:<24} {ms:9.3} ms{label}");
+            }
+        }
+        Err(e) => eprintln!("  no stage timings: {e}"),
+    }
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let scene = match &a.scene {
+        Some(p) => {
+            hfgi::scene::file::load_scene(p, &a.overrides).with_context(|| format!("loading scene {}", p.display()))?
+        }
+        None => {
+            let empty = std::path::Path::new(".");
+            hfgi::scene::file::parse_scene("", empty, "default scene", &a.overrides)
+                .context("building the default scene")?
+        }
+    };
+    let ctx = context(&a.device)?;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let max = ctx.info().max_image_dimension_2d as usize;
+    if w > max || h > max {
+        bail!("height field {w}×{h} exceeds this device's maxImageDimension2D {max}");
+    }
+    let gi = &scene.gi;
+    eprintln!(
+        "device: {} ({}); field {w}×{h}; n={} m={} k_v={} o_v={} subsample={} {} {}",
+        ctx.info().name,
+        ctx.info().driver,
+        gi.sh_order,
+        gi.azimuths,
+        gi.level_step,
+        gi.level_offset,
+        gi.subsample,
+        gi.interpolation,
+        gi.pyramid
+    );
+    let renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
+    let mut timer = StageTimer::new(&ctx, 32)?;
+    let run = ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
+        renderer.record(&mut rec);
+        Ok(())
+    });
+    let layers = run.and_then(|_| renderer.read_layers(&ctx));
+    print_timings(&ctx, &timer);
+    eprintln!("  GPU memory: {:.2} MiB", renderer.memory_bytes() as f64 / 1048576.0);
+    renderer.destroy(&ctx);
+    timer.destroy(&ctx);
+    let layers = layers?;
+    ctx.check_validation()?;
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let exposure = a.exposure.unwrap_or(scene.camera.exposure);
+    hfgi::io::png::write_tonemapped(&a.out, w, h, &layers.total, exposure)?;
+    eprintln!("wrote {}", a.out.display());
+    if let Some(path) = &a.heights_png {
+        hfgi::io::png::write_gray_normalized(path, w, h, scene.field.data())?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.shading_exr {
+        hfgi::io::exr::write_rgb_layers(
+            path,
+            w,
+            h,
+            &[
+                ("", &layers.total),
+                ("direct", &layers.direct),
+                ("indirect", &layers.indirect),
+                ("glossy", &layers.glossy),
+            ],
+        )?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn load_field(a: &PyramidArgs, max_dim: u32) -> Result<HeightField> {
     if let Some(path) = &a.heights {
         let raw_size = a.raw_size.as_deref().map(|s| parse_size(s, "--raw-size")).transpose()?;
         let opts = LoadOptions { height_scale: a.height_scale, raw_size, max_dim };
@@ -105,15 +222,16 @@ fn load_field(a: &RenderArgs, max_dim: u32) -> Result<HeightField> {
     gen.generate(w, h).with_context(|| format!("generating {}×{} field with {:?}", w, h, a.generator))
 }
 
-fn render(a: RenderArgs) -> Result<()> {
+fn pyramid(a: PyramidArgs) -> Result<()> {
     let mode: PyramidMode = a.pyramid.parse().context("--pyramid")?;
-    let ctx = context(a.device.clone(), a.validation)?;
+    let ctx = context(&a.device)?;
     let field = load_field(&a, ctx.info().max_image_dimension_2d)?;
     let (w, h) = (field.width(), field.height());
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     eprintln!("device: {} ({}), field {w}×{h}, k_v = {}, {mode}", ctx.info().name, ctx.info().driver, a.level_step);
 
-    let pyr = HeightPyramid::new(&ctx, w, h, (w, h), a.level_step, mode, a.wrap).context("creating the height pyramid")?;
+    let pyr =
+        HeightPyramid::new(&ctx, w, h, (w, h), a.level_step, mode, a.wrap).context("creating the height pyramid")?;
     pyr.upload(&ctx, &field)?;
     let mut timer = StageTimer::new(&ctx, 32)?;
     ctx.submit_and_wait(|cmd| {
@@ -121,23 +239,10 @@ fn render(a: RenderArgs) -> Result<()> {
         pyr.record(&mut rec);
         Ok(())
     })?;
-    match timer.timings(&ctx) {
-        Ok(t) => {
-            let label = if ctx.info().kind == ash::vk::PhysicalDeviceType::CPU {
-                " (lavapipe: CPU time, not a GPU time)"
-            } else {
-                ""
-            };
-            for (stage, ms) in t {
-                eprintln!("  {stage:<24} {ms:9.3} ms{label}");
-            }
-        }
-        Err(e) => eprintln!("  no stage timings: {e}"),
-    }
+    print_timings(&ctx, &timer);
     eprintln!("  pyramid memory: {:.2} MiB ({} levels)", pyr.memory_bytes() as f64 / 1048576.0, pyr.layout().count());
 
-    let heights_png = a.out.join("heights.png");
-    hfgi::io::png::write_gray_normalized(&heights_png, w, h, field.data())?;
+    hfgi::io::png::write_gray_normalized(&a.out.join("heights.png"), w, h, field.data())?;
     hfgi::io::exr::write_scalar(&a.out.join("heights.exr"), w, h, "height", field.data())?;
 
     // Levels, each B-spline resampled to full resolution (the stack, or the same filter on the fly).
@@ -236,6 +341,7 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Render(a) => render(a),
+        Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),
         Command::Spirv { out } => spirv(&out),
     }

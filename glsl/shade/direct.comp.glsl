@@ -1,0 +1,122 @@
+#version 460
+// Direct shading (NS09 §7; docs/direct.md §6) at full resolution: incident radiance
+// T = Σ_sets L_set ⊛ V_set (SH triple product, truncated to order n), diffuse
+// ρ/π · ⟨T, rotated clamped-cosine ZH about N⟩ and glossy k_s · ⟨T, rotated Phong ZH about R⟩.
+// Visibility comes from the (possibly sub-sampled) receiver grid, interpolated bilinearly;
+// normals are always full resolution (fig. 7).
+#include "hfgi_shared.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(constant_id = 0) const int HFGI_N = 4;
+const int HFGI_N2 = HFGI_N * HFGI_N;
+
+layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
+layout(std430, binding = 1) readonly buffer Vis { float hfgi_vis[]; };           // sets × receivers × n²
+layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };        // sets × n² (rgb)
+layout(std430, binding = 3) readonly buffer Triple { uvec2 hfgi_triple[]; };     // (i | j<<8 | k<<16, γ bits)
+layout(std430, binding = 4) readonly buffer Albedo { vec4 hfgi_albedo[]; };      // per texel (albedo_map)
+layout(std430, binding = 5) readonly buffer Consts {
+    float hfgi_klm[64];
+    float hfgi_zh_diffuse[8]; // √(4π/(2l+1)) · clamped-cosine ZH
+    float hfgi_zh_glossy[8];  // √(4π/(2l+1)) · Phong ZH
+    uint hfgi_triple_count;
+};
+layout(std430, binding = 6) writeonly buffer Out { vec4 hfgi_out[]; };        // 4 layers × W×H
+layout(push_constant) uniform Push { hfgi_ShadePush pc; };
+#include "hfgi_sh.glsl"
+
+float height(int x, int y) {
+    return hfgi_levels[uint(y) * pc.width + uint(x)];
+}
+
+int wrap_or_clamp(int p, int n) {
+    if (pc.wrap != 0u) { int m = p % n; return m < 0 ? m + n : m; }
+    return clamp(p, 0, n - 1);
+}
+
+// CONVENTIONS.md normals: central differences inside, one-sided at the border (periodic with wrap).
+vec3 normal_at(ivec2 p) {
+    int w = int(pc.width), h = int(pc.height);
+    int x0, x1, y0, y1;
+    float dx, dy;
+    if (pc.wrap != 0u) {
+        x0 = p.x - 1; x1 = p.x + 1; y0 = p.y - 1; y1 = p.y + 1; dx = 2.0; dy = 2.0;
+    } else {
+        x0 = max(p.x - 1, 0); x1 = min(p.x + 1, w - 1); y0 = max(p.y - 1, 0); y1 = min(p.y + 1, h - 1);
+        dx = float(x1 - x0); dy = float(y1 - y0);
+    }
+    float hx = (height(wrap_or_clamp(x1, w), p.y) - height(wrap_or_clamp(x0, w), p.y)) / (dx * pc.texel_size);
+    float hy = (height(p.x, wrap_or_clamp(y1, h)) - height(p.x, wrap_or_clamp(y0, h))) / (dy * pc.texel_size);
+    return normalize(vec3(-hx, -hy, 1.0));
+}
+
+vec3 hfgi_T[HFGI_N2];
+float hfgi_V[HFGI_N2];
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= int(pc.width) || p.y >= int(pc.height)) return;
+    vec3 N = normal_at(p);
+
+    // Receiver-grid position of this texel and its bilinear weights (docs/direct.md §6).
+    vec2 pw = (vec2(p) + 0.5) * vec2(pc.work_width, pc.work_height) / vec2(pc.width, pc.height) - 0.5;
+    vec2 fl = floor(pw);
+    vec2 f = pw - fl;
+    ivec2 b = ivec2(fl);
+    int ww = int(pc.work_width), wh = int(pc.work_height);
+    uint r00 = uint(wrap_or_clamp(b.y, wh) * ww + wrap_or_clamp(b.x, ww));
+    uint r10 = uint(wrap_or_clamp(b.y, wh) * ww + wrap_or_clamp(b.x + 1, ww));
+    uint r01 = uint(wrap_or_clamp(b.y + 1, wh) * ww + wrap_or_clamp(b.x, ww));
+    uint r11 = uint(wrap_or_clamp(b.y + 1, wh) * ww + wrap_or_clamp(b.x + 1, ww));
+    float w00 = (1.0 - f.x) * (1.0 - f.y), w10 = f.x * (1.0 - f.y), w01 = (1.0 - f.x) * f.y, w11 = f.x * f.y;
+    uint receivers = pc.work_width * pc.work_height;
+
+    for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] = vec3(0.0);
+    for (uint s = 0u; s < pc.set_count; ++s) {
+        uint base = s * receivers * uint(HFGI_N2);
+        for (int k = 0; k < HFGI_N2; ++k) {
+            hfgi_V[k] = w00 * hfgi_vis[base + r00 * uint(HFGI_N2) + uint(k)] + w10 * hfgi_vis[base + r10 * uint(HFGI_N2) + uint(k)]
+                      + w01 * hfgi_vis[base + r01 * uint(HFGI_N2) + uint(k)] + w11 * hfgi_vis[base + r11 * uint(HFGI_N2) + uint(k)];
+        }
+        uint lbase = s * uint(HFGI_N2);
+        // T_k += Σ_ij Γ_ijk L_i V_j (every ordered (i, j, k) is stored).
+        for (uint e = 0u; e < hfgi_triple_count; ++e) {
+            uvec2 t = hfgi_triple[e];
+            uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
+            hfgi_T[k] += uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light[lbase + i].rgb;
+        }
+    }
+
+    // Diffuse: E = Σ_k T_k c_k with c the clamped cosine ZH rotated to N.
+    hfgi_sh_eval(N);
+    vec3 E = vec3(0.0);
+    for (int l = 0; l < HFGI_N; ++l) {
+        for (int m = -l; m <= l; ++m) {
+            int k = l * (l + 1) + m;
+            E += hfgi_T[k] * (hfgi_zh_diffuse[l] * hfgi_y[k]);
+        }
+    }
+    vec3 rho = pc.albedo_map != 0u ? hfgi_albedo[uint(p.y) * pc.width + uint(p.x)].rgb : pc.albedo.rgb;
+    vec3 direct = rho * E * 0.31830988618379067;
+
+    vec3 glossy = vec3(0.0);
+    if (pc.glossy != 0u) {
+        vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
+        vec3 wo = normalize(pc.camera.xyz - P);
+        vec3 R = 2.0 * dot(N, wo) * N - wo;
+        hfgi_sh_eval(normalize(R));
+        vec3 G = vec3(0.0);
+        for (int l = 0; l < HFGI_N; ++l) {
+            for (int m = -l; m <= l; ++m) {
+                int k = l * (l + 1) + m;
+                G += hfgi_T[k] * (hfgi_zh_glossy[l] * hfgi_y[k]);
+            }
+        }
+        glossy = pc.specular.rgb * G;
+    }
+    uint plane = pc.width * pc.height;
+    uint idx = uint(p.y) * pc.width + uint(p.x);
+    hfgi_out[idx] = vec4(direct + glossy, 1.0);     // total (indirect is 0 in the direct stage)
+    hfgi_out[plane + idx] = vec4(direct, 1.0);
+    hfgi_out[2u * plane + idx] = vec4(0.0, 0.0, 0.0, 1.0);
+    hfgi_out[3u * plane + idx] = vec4(glossy, 1.0);
+}

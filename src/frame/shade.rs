@@ -1,0 +1,221 @@
+//! Stage `shade.direct` (NS09 §7; docs/direct.md §5–6): direct diffuse and Phong shading at
+//! full resolution from the light sets' SH visibility.
+//!
+//! Output: [`ShadePass::output`], `vec4` per texel (rgb + 1), four planes of `W × H`:
+//! [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`], [`LAYER_GLOSSY`]. After `record`, a
+//! compute→compute barrier has been recorded; for vertex/fragment or transfer reads add the
+//! matching barrier.
+
+use std::f64::consts::PI;
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::pyramid::HeightPyramid;
+use super::shared::ShadePush;
+use super::visibility::{light_sets, SetKind, VisibilityPass};
+use crate::error::Result;
+use crate::math::azimuth::AzimuthSet;
+use crate::math::{sh, triple, zh};
+use crate::scene::model::{Albedo, Scene};
+use crate::shaders;
+use crate::vk::pipeline::{groups, Bind};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+
+pub const STAGE_DIRECT: &str = "shade.direct";
+
+pub const LAYER_TOTAL: usize = 0;
+pub const LAYER_DIRECT: usize = 1;
+pub const LAYER_INDIRECT: usize = 2;
+pub const LAYER_GLOSSY: usize = 3;
+/// Layer names as exported (CONVENTIONS.md): the total is the default layer.
+pub const LAYER_NAMES: [&str; 4] = ["", "direct", "indirect", "glossy"];
+
+/// SH lighting of one light set, `n²` RGB coefficients (docs/direct.md §5): the environment's
+/// coefficients, or a key light's power spread uniformly over its azimuth/elevation window.
+pub fn set_lighting(scene: &Scene, kind: SetKind, set: &AzimuthSet) -> Vec<[f64; 3]> {
+    let n = scene.gi.sh_order;
+    match kind {
+        SetKind::Environment => (0..n * n).map(|k| scene.environment.sh.get(k).copied().unwrap_or([0.0; 3])).collect(),
+        SetKind::KeyLight(i) => {
+            let l = &scene.key_lights[i];
+            let scale = cap_solid_angle(l.angular_radius) / window_solid_angle(set) * (4.0 * PI).sqrt();
+            let mut c = vec![[0.0; 3]; n * n];
+            c[0] = [l.radiance[0] * scale, l.radiance[1] * scale, l.radiance[2] * scale];
+            c
+        }
+    }
+}
+
+/// Solid angle of a cap of angular radius `alpha`: `2π(1 − cos α)`.
+pub fn cap_solid_angle(alpha: f64) -> f64 {
+    2.0 * PI * (1.0 - alpha.cos())
+}
+
+/// Solid angle of a set's azimuth × elevation window.
+pub fn window_solid_angle(set: &AzimuthSet) -> f64 {
+    let span: f64 = set.wedges.iter().map(|w| w.width).sum();
+    span * (set.hi.sin() - set.lo.sin())
+}
+
+/// The constants block of the shader: K_l^m table, rotated-ZH band factors, triple count.
+fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
+    let mut klm = [0f32; 64];
+    for l in 0..n {
+        for m in 0..=l {
+            let k = sh::k_lm(l, m) * if m > 0 { std::f64::consts::SQRT_2 } else { 1.0 };
+            klm[l * (l + 1) + m] = k as f32;
+        }
+    }
+    let cc = zh::clamped_cosine(n);
+    let mut diffuse = [0f32; 8];
+    let mut glossy = [0f32; 8];
+    for l in 0..n {
+        let band = (4.0 * PI / (2 * l + 1) as f64).sqrt();
+        diffuse[l] = (band * cc[l]) as f32;
+        // Normalised Phong lobe: z_l = √((2l+1)/4π)·e^(−l²/2S), so band·z_l = e^(−l²/2S).
+        glossy[l] = (-((l * l) as f64) / (2.0 * exponent)).exp() as f32;
+    }
+    let mut out: Vec<u32> = Vec::with_capacity(84);
+    out.extend(klm.iter().map(|v| v.to_bits()));
+    out.extend(diffuse.iter().map(|v| v.to_bits()));
+    out.extend(glossy.iter().map(|v| v.to_bits()));
+    out.push(triple_count);
+    out
+}
+
+/// The direct shading pass.
+pub struct ShadePass {
+    pipeline: ComputePipeline,
+    descriptors: vk::DescriptorSet,
+    buffers: Vec<Buffer>, // light, triple, albedo, consts
+    output: Buffer,
+    push: ShadePush,
+}
+
+impl ShadePass {
+    pub fn new(ctx: &Context, pyramid: &HeightPyramid, vis: &VisibilityPass, scene: &Scene) -> Result<Self> {
+        let n = scene.gi.sh_order;
+        let (w, h) = (scene.field.width(), scene.field.height());
+        let light: Vec<[f32; 4]> = light_sets(scene)
+            .iter()
+            .flat_map(|(k, set)| set_lighting(scene, *k, set))
+            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
+            .collect();
+        let t = triple::triple(n);
+        let entries: Vec<[u32; 2]> = t
+            .entries
+            .iter()
+            .map(|&(i, j, k, g)| [i as u32 | (j as u32) << 8 | (k as u32) << 16, (g as f32).to_bits()])
+            .collect();
+        let albedo: Vec<[f32; 4]> = match &scene.material.albedo {
+            Albedo::Map(m) => m.iter().map(|a| [a[0], a[1], a[2], 0.0]).collect(),
+            Albedo::Constant(_) => vec![[0.0; 4]],
+        };
+        let consts = constants(n, scene.material.exponent as f64, entries.len() as u32);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let mut bufs: Vec<Buffer> = Vec::new();
+        let mut pipeline = None;
+        let made = (|| -> Result<vk::DescriptorSet> {
+            for (name, bytes) in [
+                ("hfgi.shade.light", bytemuck::cast_slice::<_, u8>(&light)),
+                ("hfgi.shade.triple", bytemuck::cast_slice(&entries)),
+                ("hfgi.shade.albedo", bytemuck::cast_slice(&albedo)),
+                ("hfgi.shade.consts", bytemuck::cast_slice(&consts)),
+            ] {
+                let b = Buffer::new(ctx, name, bytes.len().max(16) as u64, usage, MemoryLocation::GpuOnly)?;
+                if !bytes.is_empty() {
+                    memory::upload(ctx, &b, 0, bytes)?;
+                }
+                bufs.push(b);
+            }
+            bufs.push(Buffer::new(ctx, "hfgi.shade.output", (4 * w * h * 16) as u64, usage, MemoryLocation::GpuOnly)?);
+            let p = pipeline.insert(ComputePipeline::new(
+                ctx,
+                &shaders::SHADE_DIRECT_COMP,
+                &[DescriptorKind::StorageBuffer; 7],
+                std::mem::size_of::<ShadePush>() as u32,
+                &[(0, n as u32)],
+                1,
+            )?);
+            p.allocate_set(
+                ctx,
+                &[
+                    Bind::Buffer(pyramid.levels_buffer()),
+                    Bind::Buffer(vis.buffer()),
+                    Bind::Buffer(&bufs[0]),
+                    Bind::Buffer(&bufs[1]),
+                    Bind::Buffer(&bufs[2]),
+                    Bind::Buffer(&bufs[3]),
+                    Bind::Buffer(&bufs[4]),
+                ],
+            )
+        })();
+        let descriptors = match made {
+            Ok(d) => d,
+            Err(e) => {
+                bufs.into_iter().for_each(|b| b.destroy(ctx));
+                if let Some(mut p) = pipeline {
+                    p.destroy(ctx);
+                }
+                return Err(e);
+            }
+        };
+        let output = bufs.pop().expect("output");
+        let (ww, wh) = pyramid.work();
+        let cam = scene.camera.position;
+        let (albedo_map, albedo) = match &scene.material.albedo {
+            Albedo::Map(_) => (1, [0.0; 4]),
+            Albedo::Constant(a) => (0, [a[0], a[1], a[2], 0.0]),
+        };
+        let spec = scene.material.specular.unwrap_or([0.0; 3]);
+        let push = ShadePush {
+            width: w as u32,
+            height: h as u32,
+            work_width: ww,
+            work_height: wh,
+            set_count: vis.set_count() as u32,
+            wrap: scene.wrap as u32,
+            glossy: scene.material.specular.is_some() as u32,
+            albedo_map,
+            texel_size: scene.texel_size as f32,
+            pad: [0.0; 3],
+            camera: [cam.x as f32, cam.y as f32, cam.z as f32, 0.0],
+            specular: [spec[0], spec[1], spec[2], 0.0],
+            albedo,
+        };
+        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, push })
+    }
+
+    pub fn record(&self, rec: &mut Recorder) {
+        rec.scope(STAGE_DIRECT, |ctx, cmd| {
+            let g = [groups(self.push.width, 8), groups(self.push.height, 8), 1];
+            self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&self.push), g);
+            barrier::compute_to_compute(ctx, cmd);
+        });
+    }
+
+    /// The shading buffer (4 layers × W×H × vec4).
+    pub fn output(&self) -> &Buffer {
+        &self.output
+    }
+
+    /// Reads layer `layer` back as RGB (waits).
+    pub fn read_layer(&self, ctx: &Context, layer: usize) -> Result<Vec<[f32; 3]>> {
+        let plane = (self.push.width * self.push.height) as u64;
+        let v = memory::download_f32(ctx, &self.output, layer as u64 * plane * 4, plane * 4)?;
+        Ok(v.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    pub fn memory_bytes(&self) -> u64 {
+        self.buffers.iter().map(|b| b.size).sum::<u64>() + self.output.size
+    }
+
+    pub fn destroy(mut self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+        self.buffers.drain(..).for_each(|b| b.destroy(ctx));
+        self.output.destroy(ctx);
+    }
+}

@@ -1,0 +1,219 @@
+//! Stages `visibility.environment` and `visibility.key_lights` (NS09 §5.2, §6; docs/direct.md
+//! §1–4): the SH visibility vector `V` (n² floats) of each light set at every receiver of the
+//! working grid.
+//!
+//! Output: [`VisibilityPass::buffer`], `f32`, laid out `[set][receiver y][receiver x][k < n²]`.
+//! Sets: the environment first (when the scene has one), then each key light in order.
+//! After `record`, a compute→compute barrier has been recorded.
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::pyramid::HeightPyramid;
+use super::shared::VisibilityPush;
+use crate::error::Result;
+use crate::math::azimuth::{self, AzimuthSet};
+use crate::scene::model::{PyramidMode, Scene};
+use crate::shaders;
+use crate::vk::pipeline::{groups, Bind};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+
+pub const STAGE_ENVIRONMENT: &str = "visibility.environment";
+pub const STAGE_KEY_LIGHTS: &str = "visibility.key_lights";
+
+/// Which light a set of azimuth samples belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetKind {
+    Environment,
+    KeyLight(usize),
+}
+
+/// The light sets of a scene with their azimuth samples (docs/direct.md §4).
+pub fn light_sets(scene: &Scene) -> Vec<(SetKind, AzimuthSet)> {
+    let gi = &scene.gi;
+    let mut sets = Vec::new();
+    if scene.environment.sh.iter().any(|c| c.iter().any(|v| *v != 0.0)) {
+        sets.push((SetKind::Environment, azimuth::environment_set(gi.azimuths as usize, gi.interpolation)));
+    }
+    for (i, l) in scene.key_lights.iter().enumerate() {
+        sets.push((SetKind::KeyLight(i), azimuth::key_light_set(l, gi.key_light_azimuths as usize, gi.interpolation)));
+    }
+    sets
+}
+
+struct SetRange {
+    kind: SetKind,
+    first: u32,
+    count: u32,
+}
+
+/// The visibility pass and its buffers.
+pub struct VisibilityPass {
+    pipeline: ComputePipeline,
+    descriptors: vk::DescriptorSet,
+    samples: Buffer,
+    fold: Buffer,
+    vis: Buffer,
+    sets: Vec<SetRange>,
+    n: usize,
+    push: VisibilityPush,
+}
+
+impl VisibilityPass {
+    /// Builds the pass for `scene` reading `pyramid`. The azimuth samples and the folded wedge
+    /// matrices `A_j` are computed here in f64 and uploaded.
+    pub fn new(ctx: &Context, pyramid: &HeightPyramid, scene: &Scene) -> Result<Self> {
+        let n = scene.gi.sh_order;
+        let n2 = n * n;
+        let (ww, wh) = pyramid.work();
+        let light_sets = light_sets(scene);
+        let mut samples: Vec<[f32; 4]> = Vec::new();
+        let mut fold: Vec<f32> = Vec::new();
+        let mut sets = Vec::new();
+        for (kind, set) in &light_sets {
+            let first = samples.len() as u32;
+            for &phi in &set.phi {
+                samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
+            }
+            for a in azimuth::fold(n, set, scene.gi.interpolation) {
+                fold.extend(a.data.iter().map(|&v| v as f32));
+            }
+            sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
+        }
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let vis_floats = (sets.len().max(1) * ww as usize * wh as usize * n2) as u64;
+        let mut parts: Vec<Buffer> = Vec::new();
+        let mut pipeline = None;
+        let made = (|| -> Result<vk::DescriptorSet> {
+            parts.push(Buffer::new(
+                ctx,
+                "hfgi.visibility.samples",
+                (samples.len().max(1) * 16) as u64,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?);
+            parts.push(Buffer::new(
+                ctx,
+                "hfgi.visibility.fold",
+                (fold.len().max(1) * 4) as u64,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?);
+            parts.push(Buffer::new(ctx, "hfgi.visibility.v", vis_floats * 4, usage, MemoryLocation::GpuOnly)?);
+            if !samples.is_empty() {
+                memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
+                memory::upload_f32(ctx, &parts[1], 0, &fold)?;
+            }
+            let p = pipeline.insert(ComputePipeline::new(
+                ctx,
+                &shaders::VISIBILITY_VISIBILITY_COMP,
+                &[DescriptorKind::StorageBuffer; 6],
+                std::mem::size_of::<VisibilityPush>() as u32,
+                &[(0, n as u32), (1, pyramid.layout().count() as u32)],
+                1,
+            )?);
+            let stack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
+            p.allocate_set(
+                ctx,
+                &[
+                    Bind::Buffer(pyramid.levels_buffer()),
+                    Bind::Buffer(pyramid.table_buffer()),
+                    Bind::Buffer(stack),
+                    Bind::Buffer(&parts[0]),
+                    Bind::Buffer(&parts[1]),
+                    Bind::Buffer(&parts[2]),
+                ],
+            )
+        })();
+        let descriptors = match made {
+            Ok(d) => d,
+            Err(e) => {
+                parts.into_iter().for_each(|b| b.destroy(ctx));
+                if let Some(mut p) = pipeline {
+                    p.destroy(ctx);
+                }
+                return Err(e);
+            }
+        };
+        let vis = parts.pop().expect("v");
+        let fold_buf = parts.pop().expect("fold");
+        let samples_buf = parts.pop().expect("samples");
+        let push = VisibilityPush {
+            wrap: pyramid.wrap() as u32,
+            work_width: ww,
+            work_height: wh,
+            level_step: scene.gi.level_step,
+            level_bias: scene.gi.level_step * scene.gi.level_offset,
+            texel_size: scene.texel_size as f32,
+            stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
+            ..Default::default()
+        };
+        Ok(Self {
+            pipeline: pipeline.expect("pipeline"),
+            descriptors,
+            samples: samples_buf,
+            fold: fold_buf,
+            vis,
+            sets,
+            n,
+            push,
+        })
+    }
+
+    /// Records one dispatch per light set, inside the stage scopes.
+    pub fn record(&self, rec: &mut Recorder) {
+        let receivers = self.push.work_width * self.push.work_height;
+        let n2 = (self.n * self.n) as u32;
+        let groups = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
+        for (stage, env) in [(STAGE_ENVIRONMENT, true), (STAGE_KEY_LIGHTS, false)] {
+            let chosen: Vec<(usize, &SetRange)> =
+                self.sets.iter().enumerate().filter(|(_, s)| (s.kind == SetKind::Environment) == env).collect();
+            if chosen.is_empty() {
+                continue;
+            }
+            rec.scope(stage, |ctx, cmd| {
+                for (i, s) in &chosen {
+                    let push = VisibilityPush {
+                        sample_offset: s.first,
+                        sample_count: s.count,
+                        out_offset: *i as u32 * receivers * n2,
+                        ..self.push
+                    };
+                    self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
+                }
+                barrier::compute_to_compute(ctx, cmd);
+            });
+        }
+    }
+
+    /// Number of light sets (the first dimension of [`VisibilityPass::buffer`]).
+    pub fn set_count(&self) -> usize {
+        self.sets.len()
+    }
+    /// What each set is, in buffer order.
+    pub fn set_kinds(&self) -> Vec<SetKind> {
+        self.sets.iter().map(|s| s.kind).collect()
+    }
+    /// The V vectors of all sets.
+    pub fn buffer(&self) -> &Buffer {
+        &self.vis
+    }
+    /// Reads the V vectors of set `i` back (`receivers × n²` floats; waits).
+    pub fn read(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
+        let per = (self.push.work_width * self.push.work_height) as u64 * (self.n * self.n) as u64;
+        memory::download_f32(ctx, &self.vis, i as u64 * per, per)
+    }
+    /// Bytes of GPU memory held.
+    pub fn memory_bytes(&self) -> u64 {
+        self.samples.size + self.fold.size + self.vis.size
+    }
+
+    pub fn destroy(mut self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+        self.samples.destroy(ctx);
+        self.fold.destroy(ctx);
+        self.vis.destroy(ctx);
+    }
+}

@@ -1,0 +1,238 @@
+//! CPU (f64) twin of the direct-illumination passes, following docs/direct.md literally:
+//! horizon scan (eq. 14–17), NLP projection (eq. 10–11), wedges applied one by one with
+//! `M_lin`/`M_bspl` and `Rot_z` (eq. 20–21, not the GPU's folded matrices), SH triple product
+//! and ZH shading (§7).
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use glam::DVec3;
+
+use super::pyramid::{rescale, CpuPyramid};
+use crate::error::Result;
+use crate::frame::shade::set_lighting;
+use crate::frame::visibility::{light_sets, SetKind};
+use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
+use crate::math::Mat;
+use crate::math::{nlp, triple, zh};
+use crate::scene::model::{Albedo, PyramidMode, Scene};
+
+/// Tolerance (texels) of the domain test of docs/direct.md §2.
+pub const EDGE_TOL: f64 = 1e-3;
+
+/// Everything the CPU pipeline computes.
+pub struct DirectOutput {
+    pub width: usize,
+    pub height: usize,
+    /// Receiver grid.
+    pub work: (usize, usize),
+    pub direct: Vec<[f64; 3]>,
+    pub glossy: Vec<[f64; 3]>,
+    pub total: Vec<[f64; 3]>,
+    /// Per light set (environment first, then key lights), per receiver, `n²` values.
+    pub visibility: Vec<Vec<Vec<f64>>>,
+    pub kinds: Vec<SetKind>,
+    /// Full-resolution normals.
+    pub normals: Vec<[f64; 3]>,
+}
+
+/// Scan parameters shared by every receiver (docs/direct.md §2).
+pub struct Scan<'a> {
+    pub pyr: &'a CpuPyramid,
+    pub k_v: u32,
+    pub o_v: u32,
+    pub texel_size: f64,
+    pub wrap: bool,
+}
+
+impl Scan<'_> {
+    /// `ω_max` of eq. 17 at level-0 position `p` along azimuth `phi`.
+    pub fn omega_max(&self, p: [f64; 2], phi: f64) -> f64 {
+        let layout = &self.pyr.layout;
+        let n_v = layout.count();
+        let l0 = layout.levels[0];
+        let (w, h) = (l0.width as f64, l0.height as f64);
+        let big_n = w.max(h);
+        let (dx, dy) = (phi.cos(), phi.sin());
+        let mut omega = Vec::with_capacity(n_v);
+        for i in 0..n_v {
+            // eq. 14 in texels, level offset of §5.2, eq. 15.
+            let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / self.k_v as f64);
+            let q = [p[0] + t * dx, p[1] + t * dy];
+            if !self.wrap
+                && (q[0] < -EDGE_TOL || q[1] < -EDGE_TOL || q[0] > w - 1.0 + EDGE_TOL || q[1] > h - 1.0 + EDGE_TOL)
+            {
+                break;
+            }
+            let level = scan_level(i, self.k_v, self.o_v);
+            let dh = self.pyr.height_at(level, q[0], q[1]) - self.pyr.height_at(level, p[0], p[1]);
+            omega.push((dh / (t * self.texel_size)).atan());
+        }
+        bspline_max(&omega)
+    }
+}
+
+/// Pyramid level read by scan sample `i` (§5.2 level offset, docs/direct.md §2): the level
+/// whose texel matches the step, `k·o` levels finer, `max(i − k·o, 0)`.
+pub fn scan_level(i: usize, k_v: u32, o_v: u32) -> usize {
+    i.saturating_sub((k_v * o_v) as usize)
+}
+
+/// Maximum of the uniform cubic B-spline through `omega` at knots and mid-points, ends
+/// extended by repetition (eq. 17); `−π/2` for an empty sequence.
+pub fn bspline_max(omega: &[f64]) -> f64 {
+    let c = omega.len();
+    let at = |i: i64| omega[i.clamp(0, c as i64 - 1) as usize];
+    let mut best = -FRAC_PI_2;
+    for i in 0..c as i64 {
+        best = best.max((at(i - 1) + 4.0 * at(i) + at(i + 1)) / 6.0);
+        if (i as usize) + 1 < c {
+            best = best.max((at(i - 1) + 23.0 * at(i) + 23.0 * at(i + 1) + at(i + 2)) / 48.0);
+        }
+    }
+    best
+}
+
+/// `V` of one light set at level-0 position `p` (§3–4); `mats` from
+/// [`crate::math::azimuth::wedge_matrices`].
+pub fn visibility_at(scan: &Scan, n: usize, set: &AzimuthSet, mats: &[Mat], p: [f64; 2]) -> Vec<f64> {
+    let v: Vec<Vec<f64>> = set
+        .phi
+        .iter()
+        .map(|&phi| {
+            let wmax = scan.omega_max(p, phi);
+            nlp::interval(n, wmax.max(set.lo), set.hi)
+        })
+        .collect();
+    accumulate_with(n, set, mats, &v)
+}
+
+/// Bilinear interpolation of per-receiver vectors at `(x, y)` in receiver-grid units (§6).
+pub fn interpolate(vis: &[Vec<f64>], work: (usize, usize), x: f64, y: f64, wrap: bool) -> Vec<f64> {
+    let (fx, fy) = (x.floor(), y.floor());
+    let (tx, ty) = (x - fx, y - fy);
+    let idx = |i: i64, n: usize| if wrap { i.rem_euclid(n as i64) as usize } else { i.clamp(0, n as i64 - 1) as usize };
+    let (x0, x1, y0, y1) =
+        (idx(fx as i64, work.0), idx(fx as i64 + 1, work.0), idx(fy as i64, work.1), idx(fy as i64 + 1, work.1));
+    let corners =
+        [(x0, y0, (1.0 - tx) * (1.0 - ty)), (x1, y0, tx * (1.0 - ty)), (x0, y1, (1.0 - tx) * ty), (x1, y1, tx * ty)];
+    let mut out = vec![0.0; vis[0].len()];
+    for (cx, cy, wgt) in corners {
+        for (o, v) in out.iter_mut().zip(&vis[cy * work.0 + cx]) {
+            *o += wgt * v;
+        }
+    }
+    out
+}
+
+/// CONVENTIONS.md normals (periodic central differences with `wrap`).
+pub fn normals(scene: &Scene) -> Vec<[f64; 3]> {
+    let f = &scene.field;
+    let (w, h, s) = (f.width() as i64, f.height() as i64, scene.texel_size);
+    let at = |i: i64, j: i64| f.get(i.rem_euclid(w) as usize, j.rem_euclid(h) as usize) as f64;
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let (i0, i1, j0, j1) = if scene.wrap {
+                (i - 1, i + 1, j - 1, j + 1)
+            } else {
+                ((i - 1).max(0), (i + 1).min(w - 1), (j - 1).max(0), (j + 1).min(h - 1))
+            };
+            let hx = (at(i1, j) - at(i0, j)) / ((i1 - i0) as f64 * s);
+            let hy = (at(i, j1) - at(i, j0)) / ((j1 - j0) as f64 * s);
+            let n = DVec3::new(-hx, -hy, 1.0).normalize();
+            out.push(n.to_array());
+        }
+    }
+    out
+}
+
+/// The whole direct pipeline of docs/direct.md on the CPU.
+pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
+    scene.gi.validate()?;
+    let gi = &scene.gi;
+    let n = gi.sh_order;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let work = gi.working_size(w, h);
+    let pyr = CpuPyramid::build(&scene.field, work, gi.level_step, scene.wrap, gi.pyramid == PyramidMode::Stack)?;
+    let scan =
+        Scan { pyr: &pyr, k_v: gi.level_step, o_v: gi.level_offset, texel_size: scene.texel_size, wrap: scene.wrap };
+    let sets = light_sets(scene);
+
+    // Visibility at every receiver of the working grid (§1–4).
+    let visibility: Vec<Vec<Vec<f64>>> = sets
+        .iter()
+        .map(|(_, set)| {
+            let mats = wedge_matrices(n, set, gi.interpolation);
+            (0..work.0 * work.1)
+                .map(|r| {
+                    let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
+                    visibility_at(&scan, n, set, &mats, p)
+                })
+                .collect()
+        })
+        .collect();
+    let lighting: Vec<Vec<[f64; 3]>> = sets.iter().map(|(k, set)| set_lighting(scene, *k, set)).collect();
+
+    let t = triple::triple(n);
+    let normals = normals(scene);
+    let cc = zh::clamped_cosine(n);
+    let exponent = scene.material.exponent as f64;
+    let phong: Vec<f64> = (0..n)
+        .map(|l| ((2 * l + 1) as f64 / (4.0 * PI)).sqrt() * (-((l * l) as f64) / (2.0 * exponent)).exp())
+        .collect();
+    let mut direct = Vec::with_capacity(w * h);
+    let mut glossy = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
+            // Incident radiance T = Σ_sets L ⊛ V (§6), V interpolated from the receiver grid.
+            let mut tr = vec![[0.0f64; 3]; n * n];
+            for (vis, light) in visibility.iter().zip(&lighting) {
+                let v = interpolate(vis, work, xw, yw, scene.wrap);
+                for ch in 0..3 {
+                    let l: Vec<f64> = light.iter().map(|c| c[ch]).collect();
+                    for (k, val) in triple::product(&t, &l, &v).into_iter().enumerate() {
+                        tr[k][ch] += val;
+                    }
+                }
+            }
+            let nrm = normals[y * w + x];
+            let c = zh::rotate(n, &cc, nrm);
+            let rho = match &scene.material.albedo {
+                Albedo::Constant(a) => [a[0] as f64, a[1] as f64, a[2] as f64],
+                Albedo::Map(m) => {
+                    let a = m[y * w + x];
+                    [a[0] as f64, a[1] as f64, a[2] as f64]
+                }
+            };
+            let e: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * c[k]).sum()).collect();
+            direct.push([rho[0] / PI * e[0], rho[1] / PI * e[1], rho[2] / PI * e[2]]);
+            let g = match scene.material.specular {
+                Some(ks) => {
+                    let s = scene.texel_size;
+                    let p = DVec3::new(x as f64 * s, y as f64 * s, scene.field.get(x, y) as f64);
+                    let wo = (scene.camera.position - p).normalize();
+                    let nv = DVec3::from_array(nrm);
+                    let r = 2.0 * nv.dot(wo) * nv - wo;
+                    let gz = zh::rotate(n, &phong, r.normalize().to_array());
+                    let gl: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * gz[k]).sum()).collect();
+                    [ks[0] as f64 * gl[0], ks[1] as f64 * gl[1], ks[2] as f64 * gl[2]]
+                }
+                None => [0.0; 3],
+            };
+            glossy.push(g);
+        }
+    }
+    let total = direct.iter().zip(&glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
+    Ok(DirectOutput {
+        width: w,
+        height: h,
+        work,
+        direct,
+        glossy,
+        total,
+        visibility,
+        kinds: sets.iter().map(|s| s.0).collect(),
+        normals,
+    })
+}

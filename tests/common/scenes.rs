@@ -1,0 +1,64 @@
+//! Small scenes built in code for the GPU-vs-CPU tests (no scene files involved).
+#![allow(dead_code)]
+
+use glam::DVec3;
+use hfgi::math::sh;
+use hfgi::scene::model::{Albedo, Camera, Environment, GiSettings, KeyLight, Material, Scene};
+use hfgi::scene::HeightField;
+
+/// A sky-like order-4 environment: brighter above, a tilt toward +x, some higher bands.
+pub fn sky(n: usize) -> Environment {
+    let f = |d: [f64; 3]| {
+        let up = d[2].max(0.0);
+        0.3 + 0.9 * up + 0.4 * (d[0] * 0.6 + d[1] * 0.2).max(0.0) + 0.2 * (3.0 * d[2] * d[2] - 1.0) * d[0]
+    };
+    let c = sh::project(n, f, 24);
+    Environment { sh: c.iter().map(|v| [*v, v * 0.95, v * 1.1]).collect() }
+}
+
+/// Constant radiance `l` everywhere.
+pub fn uniform(l: f64) -> Environment {
+    Environment { sh: vec![[l * (4.0 * std::f64::consts::PI).sqrt(); 3]] }
+}
+
+pub fn key_light(elev_deg: f64, azim_deg: f64, radius_deg: f64, radiance: f64) -> KeyLight {
+    let (e, a) = (elev_deg.to_radians(), azim_deg.to_radians());
+    KeyLight {
+        direction: DVec3::new(e.cos() * a.cos(), e.cos() * a.sin(), e.sin()),
+        angular_radius: radius_deg.to_radians(),
+        radiance: [radiance, radiance * 0.9, radiance * 0.8],
+    }
+}
+
+/// A scene over `field` with the sky, one key light and default settings.
+pub fn scene(field: HeightField) -> Scene {
+    let (lo, hi) = field.range();
+    let camera = Camera::default_for(field.width(), field.height(), 1.0, lo as f64, hi as f64);
+    Scene {
+        field,
+        texel_size: 1.0,
+        wrap: false,
+        material: Material { albedo: Albedo::Constant([0.7, 0.6, 0.5]), specular: None, exponent: 32.0 },
+        environment: sky(8),
+        key_lights: vec![key_light(30.0, 200.0, 5.0, 4.0)],
+        gi: GiSettings::default(),
+        camera,
+    }
+}
+
+/// Relative L2 error ‖x − r‖ / ‖r‖ over all texels and channels, in f64 (CONVENTIONS.md).
+pub fn rel_l2(x: &[[f32; 3]], r: &[[f64; 3]]) -> f64 {
+    assert_eq!(x.len(), r.len());
+    let (mut num, mut den) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(r) {
+        for c in 0..3 {
+            num += (a[c] as f64 - b[c]).powi(2);
+            den += b[c] * b[c];
+        }
+    }
+    if den == 0.0 {
+        num.sqrt()
+    } else {
+        (num / den).sqrt()
+    }
+}
