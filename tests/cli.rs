@@ -16,7 +16,8 @@ fn help_documents_every_command_and_option() {
     }
     let (ok, render) = hfgi(&["render", "--help"]);
     assert!(ok, "{render}");
-    for opt in ["[SCENE]", "--set", "--out", "--shading-exr", "--exposure", "--device", "--validation"] {
+    for opt in ["[SCENE]", "--set", "--out", "--shading-exr", "--heights-png", "--exposure", "--device", "--validation"]
+    {
         assert!(render.contains(opt), "`hfgi render --help` does not document {opt}:\n{render}");
     }
     let (ok, pyramid) = hfgi(&["pyramid", "--help"]);
@@ -56,4 +57,38 @@ fn bad_input_is_an_error_with_context_not_a_panic() {
     assert!(!ok && msg.contains("gi.azimuths") && msg.contains('2') && !msg.contains("panicked"), "{msg}");
     let (ok, msg) = hfgi(&["render", "/nonexistent/scene.toml"]);
     assert!(!ok && msg.contains("/nonexistent/scene.toml") && !msg.contains("panicked"), "{msg}");
+}
+
+#[test]
+fn render_writes_the_png_and_the_layered_shading_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, exr) = (dir.path().join("r.png"), dir.path().join("s.exr"));
+    let (ok, msg) = hfgi(&[
+        "render",
+        "scenes/craters.toml",
+        "--set",
+        "heightfield.size=48",
+        "--set",
+        "gi.azimuths=8",
+        "--out",
+        png.to_str().unwrap(),
+        "--shading-exr",
+        exr.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    assert!(msg.contains("visibility.environment") && msg.contains("shade.direct"), "no stage timings:\n{msg}");
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (48, 48));
+    let (w, h, channels) = hfgi::io::exr::read_layers(&exr).unwrap();
+    assert_eq!((w, h), (48, 48));
+    let names: Vec<String> =
+        channels.iter().map(|(l, c, _)| if l.is_empty() { c.clone() } else { format!("{l}.{c}") }).collect();
+    for layer in ["", "direct.", "indirect.", "glossy."] {
+        for c in ["R", "G", "B"] {
+            let e = format!("{layer}{c}");
+            assert!(names.contains(&e), "channel {e} missing from {names:?}");
+        }
+    }
+    let r = &channels.iter().find(|(l, c, _)| l.is_empty() && c == "R").unwrap().2;
+    assert!(r.iter().all(|v| v.is_finite() && *v >= 0.0) && r.iter().any(|v| *v > 0.0));
 }
