@@ -13,7 +13,7 @@ use hfgi::scene::HeightField;
 use hfgi::vk::{Context, Recorder};
 
 fn render_gpu(ctx: &Context, scene: &Scene) -> hfgi::frame::ShadingLayers {
-    let r = Renderer::new(ctx, scene).unwrap();
+    let mut r = Renderer::new(ctx, scene).unwrap();
     ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(ctx, cmd, None);
         r.record(&mut rec);
@@ -99,7 +99,7 @@ fn flat_field_visibility_is_the_upper_hemisphere() {
         s.gi.sh_order = n;
         s.wrap = true;
         s.key_lights.clear();
-        let r = Renderer::new(&ctx, &s).unwrap();
+        let mut r = Renderer::new(&ctx, &s).unwrap();
         ctx.submit_and_wait(|cmd| {
             let mut rec = Recorder::new(&ctx, cmd, None);
             r.record(&mut rec);

@@ -8,4 +8,4 @@ pub mod shade;
 pub mod shared;
 pub mod visibility;
 
-pub use renderer::{Renderer, ShadingLayers};
+pub use renderer::{Renderer, RendererStats, ShadingLayers};

@@ -72,6 +72,7 @@ pub struct Context {
     debug_device: Option<ash::ext::debug_utils::Device>,
     info: DeviceInfo,
     submit: Mutex<Option<(vk::CommandPool, vk::Fence)>>,
+    pipelines_created: std::sync::atomic::AtomicU64,
 }
 
 unsafe extern "system" fn on_message(
@@ -236,6 +237,7 @@ impl Context {
         let debug_device = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
         let info = Self::describe(&instance, physical, family);
         Ok(Self {
+            pipelines_created: Default::default(),
             entry,
             instance,
             physical,
@@ -268,6 +270,7 @@ impl Context {
         let debug_device = raw.debug_utils.then(|| ash::ext::debug_utils::Device::new(&raw.instance, &raw.device));
         let info = Self::describe(&raw.instance, raw.physical_device, raw.queue_family_index);
         Ok(Self {
+            pipelines_created: Default::default(),
             entry: raw.entry,
             instance: raw.instance,
             physical: raw.physical_device,
@@ -387,6 +390,16 @@ impl Context {
     pub fn allocator(&self) -> &Arc<Mutex<Allocator>> {
         &self.allocator
     }
+    /// Pipelines (compute and graphics) hfgi has created on this context so far: a per-frame
+    /// loop that re-created pipelines would show here.
+    pub fn pipelines_created(&self) -> u64 {
+        self.pipelines_created.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    pub(crate) fn count_pipeline(&self) {
+        self.pipelines_created.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    }
+
     pub fn info(&self) -> &DeviceInfo {
         &self.info
     }

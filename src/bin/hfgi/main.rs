@@ -170,7 +170,7 @@ fn render(a: RenderArgs) -> Result<()> {
         gi.interpolation,
         gi.pyramid
     );
-    let renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
+    let mut renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
     let mut timer = StageTimer::new(&ctx, 32)?;
     let run = ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
