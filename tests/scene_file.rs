@@ -255,7 +255,10 @@ fn values_are_read() {
             subsample: 4,
             interpolation: Interpolation::Bspline,
             pyramid: PyramidMode::Pyramid,
-            bounces: 0
+            bounces: 0,
+            radiance_level_step: 4,
+            radiance_level_offset: 2,
+            amortize: true,
         }
     );
     assert_eq!(s.camera.position.to_array(), [1.0, 2.0, 3.0]);
@@ -422,7 +425,7 @@ fn out_of_range_values_name_key_and_value() {
     assert_mentions(&msg, &["must differ"]);
     let (key, _) = err_of(parse("[gi]\ninterpolation = \"cubic\"\n"));
     assert_eq!(key.as_deref(), Some("gi.interpolation"));
-    let (key, _) = err_of(parse("[gi]\nbounces = 1\n"));
+    let (key, _) = err_of(parse("[gi]\nbounces = 17\n"));
     assert_eq!(key.as_deref(), Some("gi.bounces"));
 }
 

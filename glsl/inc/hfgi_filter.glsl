@@ -1,10 +1,16 @@
 // hfgi — software bilinear and cubic B-spline sampling of pyramid levels stored in a float
 // buffer. The includer declares, before including this file:
 //     layout(std430, binding = N) readonly buffer ... { float hfgi_levels[]; };
+// A shader that reads two pyramids (heights and radiance) defines instead
+//     #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 // Coordinates are in the level's texel units with texel centres at integers.
 #ifndef HFGI_FILTER_GLSL
 #define HFGI_FILTER_GLSL
 #include "hfgi_shared.glsl"
+
+#ifndef HFGI_LEVEL_READ
+#define HFGI_LEVEL_READ(l, i) hfgi_levels[i]
+#endif
 
 int hfgi_address(int p, int n, bool wrap) {
     if (wrap) {
@@ -17,7 +23,7 @@ int hfgi_address(int p, int n, bool wrap) {
 float hfgi_fetch(hfgi_Level l, ivec2 p, bool wrap) {
     int x = hfgi_address(p.x, int(l.width), wrap);
     int y = hfgi_address(p.y, int(l.height), wrap);
-    return hfgi_levels[l.offset + uint(y) * l.width + uint(x)];
+    return HFGI_LEVEL_READ(l, l.offset + uint(y) * l.width + uint(x));
 }
 
 // Bilinear interpolation between texels base and base+1 with fractions f in [0, 1].

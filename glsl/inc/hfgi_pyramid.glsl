@@ -6,30 +6,40 @@
 #define HFGI_PYRAMID_GLSL
 #include "hfgi_filter.glsl"
 
-float hfgi_stack_fetch(uint level, ivec2 p, uvec2 work, bool wrap) {
+// Stack planes: `source` as in hfgi_Level. A shader reading two stacks defines
+//     #define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : hfgi_radiance_stack[i])
+#ifndef HFGI_STACK_READ
+#define HFGI_STACK_READ(source, i) hfgi_stack[i]
+#endif
+
+float hfgi_stack_fetch(uint source, uint plane, ivec2 p, uvec2 work, bool wrap) {
     int x = hfgi_address(p.x, int(work.x), wrap);
     int y = hfgi_address(p.y, int(work.y), wrap);
-    return hfgi_stack[level * work.x * work.y + uint(y) * work.x + uint(x)];
+    return HFGI_STACK_READ(source, plane * work.x * work.y + uint(y) * work.x + uint(x));
 }
 
-// Stack mode: bilinear on the synthesized plane (working resolution `work`).
+// Value of table entry `plane` (level `l`, of a pyramid whose level 0 is `base`) at level-0
+// position p0. Stack mode: bilinear on the synthesized plane (working resolution `work`).
 // Pyramid mode: the cubic B-spline of the decimated level, on the fly.
-float hfgi_height_at(uint level, vec2 p0, uvec2 work, bool stack_mode, bool wrap) {
-    hfgi_Level base = hfgi_table[0];
+float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 work, bool stack_mode, bool wrap) {
     vec2 n0 = vec2(float(base.width), float(base.height));
     if (stack_mode) {
         vec2 pw = (p0 + 0.5) * vec2(work) / n0 - 0.5;
         vec2 fl = floor(pw);
         vec2 f = pw - fl;
         ivec2 i = ivec2(fl);
-        float a = hfgi_stack_fetch(level, i, work, wrap);
-        float b = hfgi_stack_fetch(level, i + ivec2(1, 0), work, wrap);
-        float c = hfgi_stack_fetch(level, i + ivec2(0, 1), work, wrap);
-        float d = hfgi_stack_fetch(level, i + ivec2(1, 1), work, wrap);
+        float a = hfgi_stack_fetch(l.source, plane, i, work, wrap);
+        float b = hfgi_stack_fetch(l.source, plane, i + ivec2(1, 0), work, wrap);
+        float c = hfgi_stack_fetch(l.source, plane, i + ivec2(0, 1), work, wrap);
+        float d = hfgi_stack_fetch(l.source, plane, i + ivec2(1, 1), work, wrap);
         return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
     }
-    hfgi_Level l = hfgi_table[level];
     return hfgi_bspline_at(l, hfgi_rescale(p0, n0, l), wrap);
+}
+
+// Height at level `level` (hfgi_table) and level-0 position p0.
+float hfgi_height_at(uint level, vec2 p0, uvec2 work, bool stack_mode, bool wrap) {
+    return hfgi_pyramid_at(hfgi_table[0], hfgi_table[level], level, p0, work, stack_mode, wrap);
 }
 
 // Pyramid level read by scan sample i (NS09 §5.2 level offset; docs/direct.md §2): the level

@@ -4,12 +4,14 @@
 #ifndef HFGI_SHARED_GLSL
 #define HFGI_SHARED_GLSL
 
-// One level of the height pyramid inside the levels buffer (offset in floats, row-major).
+// One level of a pyramid inside its levels buffer (offset in floats, row-major). `source`
+// names the buffer: 0 = the height pyramid, 1 = the radiance pyramid (see HFGI_LEVEL_READ in
+// hfgi_filter.glsl); a pyramid of C channels has C·n_levels entries, channel c at c·n_levels.
 struct hfgi_Level {
     uint width;
     uint height;
     uint offset;
-    uint pad;
+    uint source;
 };
 
 // Push constants of the pyramid passes (decimate, synthesize, probe). 16 bytes.
@@ -47,12 +49,36 @@ struct hfgi_ShadePush {
     uint glossy;        // 1: material has a Phong lobe
     uint albedo_map;    // 1: per-texel albedo buffer
     float texel_size;
-    float pad0;
+    uint accumulate;    // indirect mode: 1 adds this bounce to planes 2 and 5, 0 overwrites
     float pad1;
     float pad2;
     vec4 camera;        // world position of the camera (xyz)
     vec4 specular;      // Phong k_s (rgb)
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
+};
+
+// Push constants of the indirect scan (indirect.scan). 48 bytes.
+struct hfgi_IndirectPush {
+    uint work_width;      // receiver grid
+    uint work_height;
+    uint wrap;
+    uint level_step;      // k_v
+    uint level_bias;      // k_v * o_v
+    float texel_size;
+    uint stack_mode;      // 1: stack (heights and radiance), 0: true pyramids
+    uint sample_count;    // azimuths m
+    uint radiance_levels; // n_u, levels per channel of the radiance pyramid
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+// Push constants of radiance.gather. 16 bytes.
+struct hfgi_GatherPush {
+    uint width;
+    uint height;
+    uint from_bounce;    // 0: direct exit radiance (shade planes 1 + 4), 1: bounce buffer
+    uint channel_stride; // floats per channel in the radiance levels buffer
 };
 
 #endif

@@ -4,13 +4,21 @@
 // ρ/π · ⟨T, rotated clamped-cosine ZH about N⟩ and glossy k_s · ⟨T, rotated Phong ZH about R⟩.
 // Visibility comes from the (possibly sub-sampled) receiver grid, interpolated bilinearly;
 // normals are always full resolution (fig. 7).
+// With HFGI_INDIRECT = 1 the same shader shades one indirect bounce (docs/indirect.md §4): the
+// incident radiance is the IR vector U of eq. 21 (RGB, from binding 1) instead of L ⊛ V.
+//
+// Output planes (vec4, W×H each): 0 total, 1 direct, 2 indirect (Σ bounces), 3 glossy,
+// 4 glossy of the direct light, 5 glossy of the indirect light. Each dispatch rewrites its own
+// planes and recomposes 0 and 3 from 1, 2, 4, 5, so direct and indirect may be updated on
+// different frames (amortised shading, §7).
 #include "hfgi_shared.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;
+layout(constant_id = 1) const int HFGI_INDIRECT = 0;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
-layout(std430, binding = 1) readonly buffer Vis { float hfgi_vis[]; };           // sets × receivers × n²
+layout(std430, binding = 1) readonly buffer Vis { float hfgi_vis[]; };           // sets × receivers × n²; U: receivers × n² × vec4
 layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };        // sets × n² (rgb)
 layout(std430, binding = 3) readonly buffer Triple { uvec2 hfgi_triple[]; };     // (i | j<<8 | k<<16, γ bits)
 layout(std430, binding = 4) readonly buffer Albedo { vec4 hfgi_albedo[]; };      // per texel (albedo_map)
@@ -20,7 +28,8 @@ layout(std430, binding = 5) readonly buffer Consts {
     float hfgi_zh_glossy[8];  // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
-layout(std430, binding = 6) writeonly buffer Out { vec4 hfgi_out[]; };        // 4 layers × W×H
+layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // 6 planes × W×H
+layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's exit radiance
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 
@@ -71,7 +80,18 @@ void main() {
     uint receivers = pc.work_width * pc.work_height;
 
     for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] = vec3(0.0);
-    for (uint s = 0u; s < pc.set_count; ++s) {
+    if (HFGI_INDIRECT != 0) {
+        // Incident indirect radiance: U of eq. 21, bilinear from the receiver grid.
+        for (int k = 0; k < HFGI_N2; ++k) {
+            uint o = uint(k) * 4u;
+            for (int c = 0; c < 3; ++c) {
+                uint oc = o + uint(c);
+                hfgi_T[k][c] = w00 * hfgi_vis[r00 * uint(HFGI_N2) * 4u + oc] + w10 * hfgi_vis[r10 * uint(HFGI_N2) * 4u + oc]
+                             + w01 * hfgi_vis[r01 * uint(HFGI_N2) * 4u + oc] + w11 * hfgi_vis[r11 * uint(HFGI_N2) * 4u + oc];
+            }
+        }
+    }
+    for (uint s = 0u; s < (HFGI_INDIRECT != 0 ? 0u : pc.set_count); ++s) {
         uint base = s * receivers * uint(HFGI_N2);
         for (int k = 0; k < HFGI_N2; ++k) {
             hfgi_V[k] = w00 * hfgi_vis[base + r00 * uint(HFGI_N2) + uint(k)] + w10 * hfgi_vis[base + r10 * uint(HFGI_N2) + uint(k)]
@@ -115,8 +135,20 @@ void main() {
     }
     uint plane = pc.width * pc.height;
     uint idx = uint(p.y) * pc.width + uint(p.x);
-    hfgi_out[idx] = vec4(direct + glossy, 1.0);     // total (indirect is 0 in the direct stage)
-    hfgi_out[plane + idx] = vec4(direct, 1.0);
-    hfgi_out[2u * plane + idx] = vec4(0.0, 0.0, 0.0, 1.0);
-    hfgi_out[3u * plane + idx] = vec4(glossy, 1.0);
+    if (HFGI_INDIRECT != 0) {
+        // `direct` and `glossy` hold this bounce's diffuse and glossy exit radiance.
+        hfgi_bounce[idx] = vec4(direct + glossy, 1.0); // the next bounce's radiance (§5.3)
+        if (pc.accumulate != 0u) {
+            direct += hfgi_out[2u * plane + idx].rgb;
+            glossy += hfgi_out[5u * plane + idx].rgb;
+        }
+        hfgi_out[2u * plane + idx] = vec4(direct, 1.0);
+        hfgi_out[5u * plane + idx] = vec4(glossy, 1.0);
+    } else {
+        hfgi_out[plane + idx] = vec4(direct, 1.0);
+        hfgi_out[4u * plane + idx] = vec4(glossy, 1.0);
+    }
+    vec3 g = hfgi_out[4u * plane + idx].rgb + hfgi_out[5u * plane + idx].rgb;
+    hfgi_out[3u * plane + idx] = vec4(g, 1.0);
+    hfgi_out[idx] = vec4(hfgi_out[plane + idx].rgb + hfgi_out[2u * plane + idx].rgb + g, 1.0);
 }

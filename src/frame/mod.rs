@@ -2,7 +2,9 @@
 //! caller's command buffer through [`crate::vk::Recorder`] and has a CPU twin in
 //! [`crate::reference`].
 
+pub mod indirect;
 pub mod pyramid;
+pub mod radiance;
 pub mod renderer;
 pub mod shade;
 pub mod shared;

@@ -71,7 +71,7 @@ impl PyramidLayout {
                     "fewer than 2^32 samples in all levels",
                 ));
             }
-            levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, pad: 0 });
+            levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, source: 0 });
             offset += (w * h) as u64;
         }
         Ok(Self { k_v, levels, total: offset })
@@ -88,9 +88,34 @@ impl PyramidLayout {
     }
 }
 
-/// The height pyramid pass and its buffers.
+/// What a pyramid holds: its channel count, the `source` id its table entries carry
+/// (`hfgi_Level.source`) and its stage names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PyramidKind {
+    pub channels: u32,
+    pub source: u32,
+    pub stage_decimate: &'static str,
+    pub stage_synthesize: &'static str,
+    pub label: &'static str,
+}
+
+impl PyramidKind {
+    /// The height pyramid: one channel, source 0, stages `pyramid.*`.
+    pub const HEIGHTS: Self = Self {
+        channels: 1,
+        source: 0,
+        stage_decimate: STAGE_DECIMATE,
+        stage_synthesize: STAGE_SYNTHESIZE,
+        label: "pyramid",
+    };
+}
+
+/// The height pyramid pass and its buffers. The same pass builds the RGB radiance pyramid
+/// ([`PyramidKind`] with 3 channels): channel `c` of level `i` is table entry `c·n_v + i`, at
+/// float offset `c·total + offset_i`, and stack plane `c·n_v + i`.
 pub struct HeightPyramid {
     layout: PyramidLayout,
+    kind: PyramidKind,
     mode: PyramidMode,
     wrap: bool,
     work: (u32, u32),
@@ -116,7 +141,39 @@ impl HeightPyramid {
         mode: PyramidMode,
         wrap: bool,
     ) -> Result<Self> {
+        Self::with_kind(ctx, width, height, work, k_v, mode, wrap, PyramidKind::HEIGHTS)
+    }
+
+    /// [`HeightPyramid::new`] for any [`PyramidKind`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_kind(
+        ctx: &Context,
+        width: usize,
+        height: usize,
+        work: (usize, usize),
+        k_v: u32,
+        mode: PyramidMode,
+        wrap: bool,
+        kind: PyramidKind,
+    ) -> Result<Self> {
         let layout = PyramidLayout::new(width, height, k_v)?;
+        let channels = kind.channels.max(1) as u64;
+        let table_entries: Vec<GpuLevel> = (0..channels)
+            .flat_map(|c| {
+                layout.levels.iter().map(move |l| GpuLevel {
+                    offset: (c * layout.total) as u32 + l.offset,
+                    source: kind.source,
+                    ..*l
+                })
+            })
+            .collect();
+        if channels * layout.total > u32::MAX as u64 {
+            return Err(Error::param(
+                "pyramid size",
+                format!("{width}×{height}×{channels}"),
+                "fewer than 2^32 samples in all levels",
+            ));
+        }
         let max = ctx.info().max_image_dimension_2d as usize;
         if width > max || height > max {
             return Err(Error::FieldSize { source_name: "pyramid".into(), width, height, max: max as u32 });
@@ -132,7 +189,7 @@ impl HeightPyramid {
             ));
         }
         let plane = (work.0 * work.1) as u64;
-        let stack_floats = plane * layout.count() as u64;
+        let stack_floats = plane * layout.count() as u64 * channels;
         if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
             return Err(Error::param(
                 "gi.pyramid",
@@ -146,19 +203,19 @@ impl HeightPyramid {
         let made = (|| -> Result<()> {
             let lv = levels.insert(Buffer::new(
                 ctx,
-                "hfgi.pyramid.levels",
-                layout.total * 4,
+                &format!("hfgi.{}.levels", kind.label),
+                layout.total * 4 * channels,
                 storage,
                 MemoryLocation::GpuOnly,
             )?);
             let tb = table.insert(Buffer::new(
                 ctx,
-                "hfgi.pyramid.table",
-                (layout.count() * 16) as u64,
+                &format!("hfgi.{}.table", kind.label),
+                (table_entries.len() * 16) as u64,
                 storage,
                 MemoryLocation::GpuOnly,
             )?);
-            memory::upload(ctx, tb, 0, bytemuck::cast_slice(&layout.levels))?;
+            memory::upload(ctx, tb, 0, bytemuck::cast_slice(&table_entries))?;
             let d = decimate.insert(ComputePipeline::new(
                 ctx,
                 &shaders::PYRAMID_DECIMATE_COMP,
@@ -171,7 +228,7 @@ impl HeightPyramid {
             if mode == PyramidMode::Stack {
                 let st = stack.insert(Buffer::new(
                     ctx,
-                    "hfgi.pyramid.stack",
+                    &format!("hfgi.{}.stack", kind.label),
                     stack_floats * 4,
                     storage,
                     MemoryLocation::GpuOnly,
@@ -191,6 +248,7 @@ impl HeightPyramid {
         match (made, levels, table, decimate) {
             (Ok(()), Some(levels), Some(table), Some(decimate)) => Ok(Self {
                 layout,
+                kind,
                 mode,
                 wrap,
                 work: (work.0 as u32, work.1 as u32),
@@ -232,25 +290,28 @@ impl HeightPyramid {
     pub fn record(&self, rec: &mut Recorder) {
         let wrap = self.wrap as u32;
         let layout = &self.layout;
-        rec.scope(STAGE_DECIMATE, |ctx, cmd| {
+        let (n, channels) = (layout.count() as u32, self.kind.channels.max(1));
+        rec.scope(self.kind.stage_decimate, |ctx, cmd| {
             // Level 0 may have been written by a copy or by a host compute pass.
             barrier::transfer_to_compute(ctx, cmd);
             barrier::compute_to_compute(ctx, cmd);
-            for i in 1..layout.count() {
-                let l = layout.levels[i];
-                let push = PyramidPush { level: i as u32, wrap, out_width: l.width, out_height: l.height };
-                self.decimate.dispatch(
-                    ctx,
-                    cmd,
-                    self.decimate_set,
-                    bytemuck::bytes_of(&push),
-                    [groups(l.width, 8), groups(l.height, 8), 1],
-                );
+            for i in 1..n {
+                let l = layout.levels[i as usize];
+                for c in 0..channels {
+                    let push = PyramidPush { level: c * n + i, wrap, out_width: l.width, out_height: l.height };
+                    self.decimate.dispatch(
+                        ctx,
+                        cmd,
+                        self.decimate_set,
+                        bytemuck::bytes_of(&push),
+                        [groups(l.width, 8), groups(l.height, 8), 1],
+                    );
+                }
                 barrier::compute_to_compute(ctx, cmd);
             }
         });
         if let Some(p) = &self.synthesize {
-            rec.scope(STAGE_SYNTHESIZE, |ctx, cmd| {
+            rec.scope(self.kind.stage_synthesize, |ctx, cmd| {
                 let (ww, wh) = self.work;
                 let push = PyramidPush { level: 0, wrap, out_width: ww, out_height: wh };
                 p.dispatch(
@@ -258,7 +319,7 @@ impl HeightPyramid {
                     cmd,
                     self.synthesize_set,
                     bytemuck::bytes_of(&push),
-                    [groups(ww, 8), groups(wh, 8), layout.count() as u32],
+                    [groups(ww, 8), groups(wh, 8), n * channels],
                 );
                 barrier::compute_to_compute(ctx, cmd);
             });

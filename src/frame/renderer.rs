@@ -1,10 +1,12 @@
 //! The GI effect assembled from its passes, in the order of NS09 figure 6:
-//! heights → pyramid → visibility (environment, key lights) → direct shade.
+//! heights → pyramid → visibility (environment, key lights) → direct shade → per bounce:
+//! radiance pyramid → indirect scan → indirect shade.
 //!
 //! The host owns the command buffer; [`Renderer::record`] records every stage into it.
 //! Inputs: the scene (heights, lights, material, settings). Output: the shading buffer of
 //! [`ShadePass`] (see its docs for the layout). Intermediates are private.
 
+use super::indirect::IndirectPass;
 use super::pyramid::HeightPyramid;
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
@@ -37,6 +39,10 @@ pub struct Renderer {
     pub pyramid: HeightPyramid,
     pub visibility: VisibilityPass,
     pub shade: ShadePass,
+    /// Present when the scene needs indirect light (bounces > 0 and some exit radiance).
+    pub indirect: Option<IndirectPass>,
+    bounces: u32,
+    amortize: bool,
     heights_changed: bool,
     stats: RendererStats,
 }
@@ -56,29 +62,61 @@ impl Renderer {
                 return Err(e);
             }
         };
-        match ShadePass::new(ctx, &pyramid, &visibility, scene) {
-            Ok(shade) => {
-                Ok(Self { pyramid, visibility, shade, heights_changed: true, stats: RendererStats::default() })
-            }
+        let shade = match ShadePass::new(ctx, &pyramid, &visibility, scene) {
+            Ok(s) => s,
             Err(e) => {
                 visibility.destroy(ctx);
                 pyramid.destroy(ctx);
-                Err(e)
+                return Err(e);
             }
-        }
+        };
+        let indirect = if needs_indirect(scene) {
+            match IndirectPass::new(ctx, &pyramid, &shade, scene) {
+                Ok(i) => Some(i),
+                Err(e) => {
+                    shade.destroy(ctx);
+                    visibility.destroy(ctx);
+                    pyramid.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        Ok(Self {
+            pyramid,
+            visibility,
+            shade,
+            indirect,
+            bounces: scene.gi.bounces,
+            amortize: scene.gi.amortize,
+            heights_changed: true,
+            stats: RendererStats::default(),
+        })
     }
 
-    /// Records the frame: pyramid (only when the heights changed since the last recorded
-    /// frame), visibility, shading.
+    /// Records the frame: the pyramid and the visibility only when the heights changed since
+    /// the last recorded frame; then the direct shading and the indirect bounces. With
+    /// `gi.amortize` and unchanged heights, even frames shade the direct light and odd frames
+    /// the indirect light (§7); when the heights changed, both.
     pub fn record(&mut self, rec: &mut Recorder) {
+        let frame = self.stats.frames;
         self.stats.frames += 1;
-        if self.heights_changed {
+        let changed = self.heights_changed;
+        if changed {
             self.pyramid.record(rec);
             self.stats.pyramid_builds += 1;
             self.heights_changed = false;
+            self.visibility.record(rec);
         }
-        self.visibility.record(rec);
-        self.shade.record(rec);
+        let (direct, indirect) =
+            if changed || !self.amortize { (true, true) } else { (frame % 2 == 0, frame % 2 == 1) };
+        if direct {
+            self.shade.record(rec);
+        }
+        if let (true, Some(ind)) = (indirect, &self.indirect) {
+            ind.record(rec, self.bounces);
+        }
     }
 
     /// Replaces the heights from the CPU (same size as the scene's field; waits for the upload).
@@ -137,12 +175,32 @@ impl Renderer {
 
     /// GPU memory held by all passes, in bytes.
     pub fn memory_bytes(&self) -> u64 {
-        self.pyramid.memory_bytes() + self.visibility.memory_bytes() + self.shade.memory_bytes()
+        self.pyramid.memory_bytes()
+            + self.visibility.memory_bytes()
+            + self.shade.memory_bytes()
+            + self.indirect.as_ref().map_or(0, |i| i.memory_bytes())
     }
 
     pub fn destroy(self, ctx: &Context) {
+        if let Some(i) = self.indirect {
+            i.destroy(ctx);
+        }
         self.shade.destroy(ctx);
         self.visibility.destroy(ctx);
         self.pyramid.destroy(ctx);
     }
+}
+
+/// Whether the scene has indirect light to compute: bounces > 0 and a surface that reflects
+/// something (non-zero albedo, or a specular lobe whose glossy light feeds the scalar radiance
+/// pyramid).
+pub fn needs_indirect(scene: &Scene) -> bool {
+    use crate::scene::model::Albedo;
+    let m = &scene.material;
+    let albedo = match &m.albedo {
+        Albedo::Constant(a) => a.iter().any(|v| *v != 0.0),
+        Albedo::Map(map) => map.iter().any(|a| a.iter().any(|v| *v != 0.0)),
+    };
+    let specular = m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0));
+    scene.gi.bounces > 0 && (albedo || specular)
 }

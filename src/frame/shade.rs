@@ -1,8 +1,11 @@
 //! Stage `shade.direct` (NS09 §7; docs/direct.md §5–6): direct diffuse and Phong shading at
 //! full resolution from the light sets' SH visibility.
 //!
-//! Output: [`ShadePass::output`], `vec4` per texel (rgb + 1), four planes of `W × H`:
-//! [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`], [`LAYER_GLOSSY`]. After `record`, a
+//! Output: [`ShadePass::output`], `vec4` per texel (rgb + 1), [`PLANES`] planes of `W × H`:
+//! [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`], [`LAYER_GLOSSY`] and the internal
+//! [`PLANE_GLOSSY_DIRECT`], [`PLANE_GLOSSY_INDIRECT`] (zero until an indirect bounce writes
+//! them). Each shading dispatch recomposes total and glossy, so direct and indirect may be
+//! updated on different frames (docs/indirect.md §5). After `record`, a
 //! compute→compute barrier has been recorded; for vertex/fragment or transfer reads add the
 //! matching barrier.
 
@@ -28,6 +31,12 @@ pub const LAYER_TOTAL: usize = 0;
 pub const LAYER_DIRECT: usize = 1;
 pub const LAYER_INDIRECT: usize = 2;
 pub const LAYER_GLOSSY: usize = 3;
+/// Internal planes: glossy exit radiance of the direct light and of the indirect bounces
+/// (their sum is [`LAYER_GLOSSY`]).
+pub const PLANE_GLOSSY_DIRECT: usize = 4;
+pub const PLANE_GLOSSY_INDIRECT: usize = 5;
+/// Planes in the shading buffer.
+pub const PLANES: usize = 6;
 /// Layer names as exported (CONVENTIONS.md): the total is the default layer.
 pub const LAYER_NAMES: [&str; 4] = ["", "direct", "indirect", "glossy"];
 
@@ -131,13 +140,22 @@ impl ShadePass {
                 }
                 bufs.push(b);
             }
-            bufs.push(Buffer::new(ctx, "hfgi.shade.output", (4 * w * h * 16) as u64, usage, MemoryLocation::GpuOnly)?);
+            let out_bytes = (PLANES * w * h * 16) as u64;
+            let out = Buffer::new(ctx, "hfgi.shade.output", out_bytes, usage, MemoryLocation::GpuOnly)?;
+            // Planes not written by a frame (indirect with bounces = 0) must read as zero.
+            let cleared = ctx.submit_and_wait(|cmd| {
+                unsafe { ctx.device().cmd_fill_buffer(cmd, out.raw, 0, vk::WHOLE_SIZE, 0) };
+                barrier::transfer_to_compute(ctx, cmd);
+                Ok(())
+            });
+            bufs.push(out);
+            cleared?;
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 7],
+                &[DescriptorKind::StorageBuffer; 8],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32)],
+                &[(0, n as u32), (1, 0)],
                 1,
             )?);
             p.allocate_set(
@@ -150,6 +168,7 @@ impl ShadePass {
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[3]),
                     Bind::Buffer(&bufs[4]),
+                    Bind::Buffer(&bufs[4]), // bounce output: unused by the direct mode
                 ],
             )
         })();
@@ -181,7 +200,8 @@ impl ShadePass {
             glossy: scene.material.specular.is_some() as u32,
             albedo_map,
             texel_size: scene.texel_size as f32,
-            pad: [0.0; 3],
+            accumulate: 0,
+            pad: [0.0; 2],
             camera: [cam.x as f32, cam.y as f32, cam.z as f32, 0.0],
             specular: [spec[0], spec[1], spec[2], 0.0],
             albedo,
@@ -197,9 +217,20 @@ impl ShadePass {
         });
     }
 
-    /// The shading buffer (4 layers × W×H × vec4).
+    /// The shading buffer: [`PLANES`] planes × W×H × vec4 (the module docs list them).
     pub fn output(&self) -> &Buffer {
         &self.output
+    }
+
+    /// Light, triple, albedo, constants and output buffers, for the indirect mode of the
+    /// shading shader (binding order of `glsl/shade/direct.comp.glsl`).
+    pub fn bindings(&self) -> [&Buffer; 5] {
+        [&self.buffers[0], &self.buffers[1], &self.buffers[2], &self.buffers[3], &self.output]
+    }
+
+    /// The push constants of the direct mode.
+    pub fn push(&self) -> ShadePush {
+        self.push
     }
 
     /// Reads layer `layer` back as RGB (waits).

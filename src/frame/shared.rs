@@ -10,7 +10,8 @@ pub struct GpuLevel {
     pub width: u32,
     pub height: u32,
     pub offset: u32,
-    pub pad: u32,
+    /// Buffer the level lives in: 0 heights, 1 radiance (`hfgi_Level.source`).
+    pub source: u32,
 }
 
 /// `hfgi_PyramidPush`: push constants of the pyramid passes.
@@ -54,12 +55,45 @@ pub struct ShadePush {
     pub glossy: u32,
     pub albedo_map: u32,
     pub texel_size: f32,
-    pub pad: [f32; 3],
+    /// Indirect mode: 1 adds the bounce to the indirect planes, 0 overwrites them.
+    pub accumulate: u32,
+    pub pad: [f32; 2],
     pub camera: [f32; 4],
     pub specular: [f32; 4],
     pub albedo: [f32; 4],
 }
 
+/// `hfgi_IndirectPush`: push constants of the indirect scan (`indirect.scan`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct IndirectPush {
+    pub work_width: u32,
+    pub work_height: u32,
+    pub wrap: u32,
+    pub level_step: u32,
+    pub level_bias: u32,
+    pub texel_size: f32,
+    pub stack_mode: u32,
+    pub sample_count: u32,
+    /// Radiance-pyramid levels per channel `n_u`.
+    pub radiance_levels: u32,
+    pub pad: [u32; 3],
+}
+
+/// `hfgi_GatherPush`: push constants of `radiance.gather`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GatherPush {
+    pub width: u32,
+    pub height: u32,
+    /// 0: bounce 1 reads the direct exit radiance (shade planes 1 + 4); 1: the bounce buffer.
+    pub from_bounce: u32,
+    /// Floats per channel in the radiance levels buffer (`PyramidLayout::total`).
+    pub channel_stride: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<IndirectPush>() == 48);
+const _: () = assert!(std::mem::size_of::<GatherPush>() == 16);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 16);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 96);

@@ -146,6 +146,56 @@ pub fn normals(scene: &Scene) -> Vec<[f64; 3]> {
     out
 }
 
+/// The BRDF lobes of §7 for one scene: diffuse clamped cosine about the normal and the
+/// normalised Phong lobe about the reflected view direction, as order-n ZH.
+pub struct Lobes {
+    n: usize,
+    cc: Vec<f64>,
+    phong: Vec<f64>,
+}
+
+impl Lobes {
+    pub fn new(scene: &Scene) -> Self {
+        let n = scene.gi.sh_order;
+        let exponent = scene.material.exponent as f64;
+        let phong = (0..n)
+            .map(|l| ((2 * l + 1) as f64 / (4.0 * PI)).sqrt() * (-((l * l) as f64) / (2.0 * exponent)).exp())
+            .collect();
+        Self { n, cc: zh::clamped_cosine(n), phong }
+    }
+
+    /// Diffuse `ρ/π · (T · cc_N)` and glossy `k_s · (T · phong_R)` exit radiance at texel
+    /// `(x, y)` with normal `nrm`, for incident SH radiance `tr` (`n²` RGB).
+    pub fn shade(&self, scene: &Scene, x: usize, y: usize, nrm: [f64; 3], tr: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+        let n = self.n;
+        let w = scene.field.width();
+        let c = zh::rotate(n, &self.cc, nrm);
+        let rho = match &scene.material.albedo {
+            Albedo::Constant(a) => [a[0] as f64, a[1] as f64, a[2] as f64],
+            Albedo::Map(m) => {
+                let a = m[y * w + x];
+                [a[0] as f64, a[1] as f64, a[2] as f64]
+            }
+        };
+        let e: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * c[k]).sum()).collect();
+        let diffuse = [rho[0] / PI * e[0], rho[1] / PI * e[1], rho[2] / PI * e[2]];
+        let glossy = match scene.material.specular {
+            Some(ks) => {
+                let s = scene.texel_size;
+                let p = DVec3::new(x as f64 * s, y as f64 * s, scene.field.get(x, y) as f64);
+                let wo = (scene.camera.position - p).normalize();
+                let nv = DVec3::from_array(nrm);
+                let r = 2.0 * nv.dot(wo) * nv - wo;
+                let gz = zh::rotate(n, &self.phong, r.normalize().to_array());
+                let gl: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * gz[k]).sum()).collect();
+                [ks[0] as f64 * gl[0], ks[1] as f64 * gl[1], ks[2] as f64 * gl[2]]
+            }
+            None => [0.0; 3],
+        };
+        (diffuse, glossy)
+    }
+}
+
 /// The whole direct pipeline of docs/direct.md on the CPU.
 pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
     scene.gi.validate()?;
@@ -175,11 +225,7 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
 
     let t = triple::triple(n);
     let normals = normals(scene);
-    let cc = zh::clamped_cosine(n);
-    let exponent = scene.material.exponent as f64;
-    let phong: Vec<f64> = (0..n)
-        .map(|l| ((2 * l + 1) as f64 / (4.0 * PI)).sqrt() * (-((l * l) as f64) / (2.0 * exponent)).exp())
-        .collect();
+    let lobes = Lobes::new(scene);
     let mut direct = Vec::with_capacity(w * h);
     let mut glossy = Vec::with_capacity(w * h);
     for y in 0..h {
@@ -196,30 +242,8 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
                     }
                 }
             }
-            let nrm = normals[y * w + x];
-            let c = zh::rotate(n, &cc, nrm);
-            let rho = match &scene.material.albedo {
-                Albedo::Constant(a) => [a[0] as f64, a[1] as f64, a[2] as f64],
-                Albedo::Map(m) => {
-                    let a = m[y * w + x];
-                    [a[0] as f64, a[1] as f64, a[2] as f64]
-                }
-            };
-            let e: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * c[k]).sum()).collect();
-            direct.push([rho[0] / PI * e[0], rho[1] / PI * e[1], rho[2] / PI * e[2]]);
-            let g = match scene.material.specular {
-                Some(ks) => {
-                    let s = scene.texel_size;
-                    let p = DVec3::new(x as f64 * s, y as f64 * s, scene.field.get(x, y) as f64);
-                    let wo = (scene.camera.position - p).normalize();
-                    let nv = DVec3::from_array(nrm);
-                    let r = 2.0 * nv.dot(wo) * nv - wo;
-                    let gz = zh::rotate(n, &phong, r.normalize().to_array());
-                    let gl: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * gz[k]).sum()).collect();
-                    [ks[0] as f64 * gl[0], ks[1] as f64 * gl[1], ks[2] as f64 * gl[2]]
-                }
-                None => [0.0; 3],
-            };
+            let (d, g) = lobes.shade(scene, x, y, normals[y * w + x], &tr);
+            direct.push(d);
             glossy.push(g);
         }
     }

@@ -1,4 +1,5 @@
 //! CPU (f64) twins of the GPU stages, same algorithm and parameters, used by the tests.
 
 pub mod direct;
+pub mod indirect;
 pub mod pyramid;

@@ -66,8 +66,22 @@ pub fn rescale(p: f64, from: usize, to: usize) -> f64 {
 impl CpuPyramid {
     /// Builds every level; with `synthesize`, also the stack at working resolution `work`.
     pub fn build(field: &HeightField, work: (usize, usize), k_v: u32, wrap: bool, synthesize: bool) -> Result<Self> {
-        let layout = PyramidLayout::new(field.width(), field.height(), k_v)?;
-        let mut levels: Vec<Vec<f64>> = vec![field.data().iter().map(|&v| v as f64).collect()];
+        let data: Vec<f64> = field.data().iter().map(|&v| v as f64).collect();
+        Self::build_f64(data, (field.width(), field.height()), work, k_v, wrap, synthesize)
+    }
+
+    /// [`CpuPyramid::build`] from f64 samples (`size.0 × size.1`, row-major), e.g. one channel
+    /// of a radiance image.
+    pub fn build_f64(
+        data: Vec<f64>,
+        size: (usize, usize),
+        work: (usize, usize),
+        k_v: u32,
+        wrap: bool,
+        synthesize: bool,
+    ) -> Result<Self> {
+        let layout = PyramidLayout::new(size.0, size.1, k_v)?;
+        let mut levels: Vec<Vec<f64>> = vec![data];
         for i in 1..layout.count() {
             let (s, d) = (layout.levels[i - 1], layout.levels[i]);
             let (sw, sh, dw, dh) = (s.width as usize, s.height as usize, d.width as usize, d.height as usize);
@@ -84,7 +98,7 @@ impl CpuPyramid {
         }
         let mut me = Self { layout, wrap, levels, stack: None, work };
         if synthesize {
-            let (w, h) = (field.width(), field.height());
+            let (w, h) = size;
             let (ww, wh) = work;
             let stack = (0..me.layout.count())
                 .map(|i| {

@@ -202,6 +202,9 @@ struct RawGi {
     interpolation: Option<String>,
     pyramid: Option<String>,
     bounces: Option<u32>,
+    radiance_level_step: Option<u32>,
+    radiance_level_offset: Option<u32>,
+    amortize: Option<bool>,
 }
 
 #[derive(Deserialize, Default)]
@@ -741,6 +744,9 @@ impl Ctx<'_> {
                 .unwrap_or(d.interpolation),
             pyramid: raw.pyramid.map(|s| s.parse::<PyramidMode>()).transpose().map_err(param)?.unwrap_or(d.pyramid),
             bounces: raw.bounces.unwrap_or(d.bounces),
+            radiance_level_step: raw.radiance_level_step.unwrap_or(d.radiance_level_step),
+            radiance_level_offset: raw.radiance_level_offset.unwrap_or(d.radiance_level_offset),
+            amortize: raw.amortize.unwrap_or(d.amortize),
         };
         gi.validate().map_err(param)?;
         Ok(gi)

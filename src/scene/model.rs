@@ -85,8 +85,15 @@ pub struct GiSettings {
     pub subsample: u32,
     pub interpolation: Interpolation,
     pub pyramid: PyramidMode,
-    /// Indirect bounces (only 0 until the indirect stage exists).
+    /// Indirect bounces, 0..=16 (0: direct light only).
     pub bounces: u32,
+    /// Radiance-pyramid level step k_u, 1..=16 (§5.3).
+    pub radiance_level_step: u32,
+    /// Radiance-pyramid level offset o_u, 0..=8 (§5.3).
+    pub radiance_level_offset: u32,
+    /// Amortised shading (§7): with static heights, even frames update the direct shading
+    /// and odd frames the indirect; when heights change, both.
+    pub amortize: bool,
 }
 
 impl Default for GiSettings {
@@ -101,6 +108,9 @@ impl Default for GiSettings {
             interpolation: Interpolation::Linear,
             pyramid: PyramidMode::Stack,
             bounces: 0,
+            radiance_level_step: 4,
+            radiance_level_offset: 2,
+            amortize: true,
         }
     }
 }
@@ -207,7 +217,7 @@ impl GiSettings {
                 Ok(())
             }
         };
-        check("gi.sh_order", self.sh_order as u32, 2, 8)?;
+        check("gi.sh_order", u32::try_from(self.sh_order).unwrap_or(u32::MAX), 2, 8)?;
         check("gi.azimuths", self.azimuths, 4, 256)?;
         check("gi.key_light_azimuths", self.key_light_azimuths, 2, 64)?;
         check("gi.level_step", self.level_step, 1, 16)?;
@@ -215,9 +225,9 @@ impl GiSettings {
         if ![1, 2, 4].contains(&self.subsample) {
             return Err(Error::param("gi.subsample", self.subsample, "1, 2 or 4"));
         }
-        if self.bounces != 0 {
-            return Err(Error::param("gi.bounces", self.bounces, "0 (indirect illumination is not implemented yet)"));
-        }
+        check("gi.bounces", self.bounces, 0, 16)?;
+        check("gi.radiance_level_step", self.radiance_level_step, 1, 16)?;
+        check("gi.radiance_level_offset", self.radiance_level_offset, 0, 8)?;
         Ok(())
     }
 

@@ -1,0 +1,227 @@
+//! Stages `indirect.scan` and `indirect.shade` (NS09 §3, §5.2–5.3, §6–7; docs/indirect.md),
+//! recorded once per bounce after the radiance pyramid of the previous bounce:
+//!
+//! - `indirect.scan`: per receiver of the working grid, the IR vector `U` (eq. 12, 19–21),
+//!   `n²` RGB coefficients (`vec4` each) in [`IndirectPass::u_buffer`].
+//! - `indirect.shade`: the shading shader in indirect mode (`glsl/shade/direct.comp.glsl`,
+//!   `HFGI_INDIRECT = 1`) shades `U` with the diffuse and Phong lobes at full resolution, adds
+//!   the bounce to the shading planes `indirect` and indirect glossy, recomposes `total` and
+//!   `glossy`, and writes the bounce's exit radiance (the next bounce's input) to the bounce
+//!   buffer.
+//!
+//! Barriers: compute→compute after each stage.
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::pyramid::HeightPyramid;
+use super::radiance::RadiancePyramid;
+use super::shade::ShadePass;
+use super::shared::{IndirectPush, ShadePush};
+use crate::error::Result;
+use crate::math::azimuth;
+use crate::reference::indirect::radiance_level;
+use crate::scene::model::{PyramidMode, Scene};
+use crate::shaders;
+use crate::vk::pipeline::{groups, Bind};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+
+pub const STAGE_SCAN: &str = "indirect.scan";
+pub const STAGE_SHADE: &str = "indirect.shade";
+
+pub struct IndirectPass {
+    pub radiance: RadiancePyramid,
+    scan: ComputePipeline,
+    scan_set: vk::DescriptorSet,
+    shade: ComputePipeline,
+    shade_set: vk::DescriptorSet,
+    buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce
+    push: IndirectPush,
+    shade_push: ShadePush,
+}
+
+const U: usize = 3;
+const BOUNCE: usize = 4;
+
+impl IndirectPass {
+    pub fn new(ctx: &Context, pyramid: &HeightPyramid, shade: &ShadePass, scene: &Scene) -> Result<Self> {
+        let gi = &scene.gi;
+        let n = gi.sh_order;
+        let (w, h) = (scene.field.width(), scene.field.height());
+        let (ww, wh) = pyramid.work();
+        let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
+        let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
+        let fold: Vec<f32> =
+            azimuth::fold(n, &set, gi.interpolation).iter().flat_map(|a| a.data.iter().map(|&v| v as f32)).collect();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let mut bufs: Vec<Buffer> = Vec::new();
+        let mut pipes: Vec<ComputePipeline> = Vec::new();
+        let mut radiance = None;
+        let made = (|| -> Result<(vk::DescriptorSet, vk::DescriptorSet)> {
+            let u_bytes = (ww as u64 * wh as u64) * (n * n) as u64 * 16;
+            for (name, size) in [
+                ("hfgi.indirect.samples", samples.len() as u64 * 16),
+                ("hfgi.indirect.fold", fold.len() as u64 * 4),
+                ("hfgi.indirect.radiance_level", pyramid.layout().count() as u64 * 4),
+                ("hfgi.indirect.u", u_bytes),
+                ("hfgi.indirect.bounce", (w * h * 16) as u64),
+            ] {
+                bufs.push(Buffer::new(ctx, name, size.max(16), usage, MemoryLocation::GpuOnly)?);
+            }
+            let rad = radiance.insert(RadiancePyramid::new(
+                ctx,
+                (w, h),
+                (ww as usize, wh as usize),
+                gi.radiance_level_step,
+                gi.pyramid,
+                scene.wrap,
+                shade.output(),
+                &bufs[BOUNCE],
+            )?);
+            // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
+            let layout = pyramid.layout();
+            let n_u = rad.pyramid.layout().count();
+            let levels: Vec<u32> = (0..layout.count())
+                .map(|i| {
+                    let t = w.max(h) as f64 * layout.tau(i);
+                    radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32
+                })
+                .collect();
+            memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
+            memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
+            memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
+            let scan = ComputePipeline::new(
+                ctx,
+                &shaders::INDIRECT_SCAN_COMP,
+                &[DescriptorKind::StorageBuffer; 10],
+                std::mem::size_of::<IndirectPush>() as u32,
+                &[(0, n as u32), (1, layout.count() as u32)],
+                1,
+            )?;
+            let scan = pipes.push_get(scan);
+            let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
+            let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
+            let scan_set = scan.allocate_set(
+                ctx,
+                &[
+                    Bind::Buffer(pyramid.levels_buffer()),
+                    Bind::Buffer(pyramid.table_buffer()),
+                    Bind::Buffer(hstack),
+                    Bind::Buffer(rad.pyramid.levels_buffer()),
+                    Bind::Buffer(rad.pyramid.table_buffer()),
+                    Bind::Buffer(rstack),
+                    Bind::Buffer(&bufs[0]),
+                    Bind::Buffer(&bufs[1]),
+                    Bind::Buffer(&bufs[2]),
+                    Bind::Buffer(&bufs[U]),
+                ],
+            )?;
+            let sh = ComputePipeline::new(
+                ctx,
+                &shaders::SHADE_DIRECT_COMP,
+                &[DescriptorKind::StorageBuffer; 8],
+                std::mem::size_of::<ShadePush>() as u32,
+                &[(0, n as u32), (1, 1)],
+                1,
+            )?;
+            let sh = pipes.push_get(sh);
+            let [light, triple, albedo, consts, output] = shade.bindings();
+            let shade_set = sh.allocate_set(
+                ctx,
+                &[
+                    Bind::Buffer(pyramid.levels_buffer()),
+                    Bind::Buffer(&bufs[U]),
+                    Bind::Buffer(light),
+                    Bind::Buffer(triple),
+                    Bind::Buffer(albedo),
+                    Bind::Buffer(consts),
+                    Bind::Buffer(output),
+                    Bind::Buffer(&bufs[BOUNCE]),
+                ],
+            )?;
+            Ok((scan_set, shade_set))
+        })();
+        let (scan_set, shade_set) = match made {
+            Ok(s) => s,
+            Err(e) => {
+                bufs.into_iter().for_each(|b| b.destroy(ctx));
+                pipes.into_iter().for_each(|mut p| p.destroy(ctx));
+                if let Some(r) = radiance {
+                    r.destroy(ctx);
+                }
+                return Err(e);
+            }
+        };
+        let shade_pipe = pipes.pop().expect("shade");
+        let scan_pipe = pipes.pop().expect("scan");
+        let push = IndirectPush {
+            work_width: ww,
+            work_height: wh,
+            wrap: scene.wrap as u32,
+            level_step: gi.level_step,
+            level_bias: gi.level_step * gi.level_offset,
+            texel_size: scene.texel_size as f32,
+            stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
+            sample_count: samples.len() as u32,
+            radiance_levels: radiance.as_ref().map_or(0, |r| r.pyramid.layout().count() as u32),
+            pad: [0; 3],
+        };
+        Ok(Self {
+            radiance: radiance.expect("radiance"),
+            scan: scan_pipe,
+            scan_set,
+            shade: shade_pipe,
+            shade_set,
+            buffers: bufs,
+            push,
+            shade_push: shade.push(),
+        })
+    }
+
+    /// Records bounces `1..=bounces`: radiance pyramid, scan, shade for each.
+    pub fn record(&self, rec: &mut Recorder, bounces: u32) {
+        for b in 1..=bounces {
+            self.radiance.record(rec, b);
+            rec.scope(STAGE_SCAN, |ctx, cmd| {
+                let g = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
+                self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&self.push), g);
+                barrier::compute_to_compute(ctx, cmd);
+            });
+            rec.scope(STAGE_SHADE, |ctx, cmd| {
+                let push = ShadePush { accumulate: (b > 1) as u32, ..self.shade_push };
+                let g = [groups(push.width, 8), groups(push.height, 8), 1];
+                self.shade.dispatch(ctx, cmd, self.shade_set, bytemuck::bytes_of(&push), g);
+                barrier::compute_to_compute(ctx, cmd);
+            });
+        }
+    }
+
+    /// The IR vectors of the last bounce: receivers × `n²` × `vec4` (rgb, 0).
+    pub fn u_buffer(&self) -> &Buffer {
+        &self.buffers[U]
+    }
+
+    pub fn memory_bytes(&self) -> u64 {
+        self.buffers.iter().map(|b| b.size).sum::<u64>() + self.radiance.memory_bytes()
+    }
+
+    pub fn destroy(mut self, ctx: &Context) {
+        self.scan.destroy(ctx);
+        self.shade.destroy(ctx);
+        self.buffers.drain(..).for_each(|b| b.destroy(ctx));
+        self.radiance.destroy(ctx);
+    }
+}
+
+trait PushGet<T> {
+    fn push_get(&mut self, v: T) -> &mut T;
+}
+
+impl<T> PushGet<T> for Vec<T> {
+    fn push_get(&mut self, v: T) -> &mut T {
+        self.push(v);
+        self.last_mut().expect("just pushed")
+    }
+}

@@ -1,0 +1,196 @@
+//! CPU (f64) twin of the indirect-illumination passes, following docs/indirect.md literally:
+//! radiance pyramid of the previous bounce (§5.3), casting-set scan with eq. 6 and eq. 12,
+//! wedges with `M_lin`/`M_bspl` and `Rot_z` (eq. 19–21), shading with the BRDF lobes (§7).
+
+use super::direct::{interpolate, normals, render_direct, scan_level, DirectOutput, Lobes, Scan, EDGE_TOL};
+use super::pyramid::{rescale, CpuPyramid};
+use crate::error::Result;
+use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
+use crate::math::nlp;
+use crate::scene::model::{PyramidMode, Scene};
+
+/// Direct and indirect results of the whole pipeline.
+pub struct GiOutput {
+    pub direct: DirectOutput,
+    /// Per bounce `b = 1..=B`: diffuse indirect exit radiance (full resolution).
+    pub indirect_bounces: Vec<Vec<[f64; 3]>>,
+    /// Per bounce: glossy indirect exit radiance toward the camera.
+    pub glossy_bounces: Vec<Vec<[f64; 3]>>,
+    /// Exported layers (CONVENTIONS.md): `indirect` = Σ_b diffuse, `glossy` = direct + Σ_b
+    /// glossy, `total` = direct + indirect + glossy.
+    pub indirect: Vec<[f64; 3]>,
+    pub glossy: Vec<[f64; 3]>,
+    pub total: Vec<[f64; 3]>,
+}
+
+/// Radiance-pyramid level read by scan sample `i` at step `t` texels (docs/indirect.md §2):
+/// the level whose texel matches `t`, `k_u·o_u` levels finer, clamped to `[0, n_u − 1]`.
+pub fn radiance_level(t: f64, k_u: u32, o_u: u32, n_u: usize) -> usize {
+    let l = (k_u as f64 * t.log2() + 1e-6).floor() as i64 - (k_u * o_u) as i64;
+    l.clamp(0, n_u as i64 - 1) as usize
+}
+
+/// Receiver normal at level-0 position `p` (docs/indirect.md §2): the CONVENTIONS.md height
+/// gradients of the four surrounding texels, bilinearly interpolated, then normalised.
+pub fn receiver_normal(scene: &Scene, p: [f64; 2]) -> [f64; 3] {
+    let f = &scene.field;
+    let (w, h, s) = (f.width() as i64, f.height() as i64, scene.texel_size);
+    let at = |i: i64, j: i64| f.get(i.rem_euclid(w) as usize, j.rem_euclid(h) as usize) as f64;
+    let grad = |i: i64, j: i64| {
+        let (i, j) =
+            if scene.wrap { (i.rem_euclid(w), j.rem_euclid(h)) } else { (i.clamp(0, w - 1), j.clamp(0, h - 1)) };
+        let (i0, i1, j0, j1) = if scene.wrap {
+            (i - 1, i + 1, j - 1, j + 1)
+        } else {
+            ((i - 1).max(0), (i + 1).min(w - 1), (j - 1).max(0), (j + 1).min(h - 1))
+        };
+        [(at(i1, j) - at(i0, j)) / ((i1 - i0) as f64 * s), (at(i, j1) - at(i, j0)) / ((j1 - j0) as f64 * s)]
+    };
+    let (fx, fy) = (p[0].floor(), p[1].floor());
+    let (tx, ty) = (p[0] - fx, p[1] - fy);
+    let (x0, y0) = (fx as i64, fy as i64);
+    let mut g = [0.0; 2];
+    for (dx, dy, wgt) in
+        [(0, 0, (1.0 - tx) * (1.0 - ty)), (1, 0, tx * (1.0 - ty)), (0, 1, (1.0 - tx) * ty), (1, 1, tx * ty)]
+    {
+        let gg = grad(x0 + dx, y0 + dy);
+        g[0] += wgt * gg[0];
+        g[1] += wgt * gg[1];
+    }
+    let len = (g[0] * g[0] + g[1] * g[1] + 1.0).sqrt();
+    [-g[0] / len, -g[1] / len, 1.0 / len]
+}
+
+/// NLP vectors `u` (per RGB channel, `n` values each) of one receiver along azimuth `phi`
+/// (eq. 6, 8, 12): the casting set above `ω_min`, each member's radiance from `rad`.
+#[allow(clippy::too_many_arguments)]
+pub fn scan_radiance(
+    scan: &Scan,
+    rad: &[CpuPyramid; 3],
+    rad_levels: &[usize],
+    n: usize,
+    p: [f64; 2],
+    phi: f64,
+    normal: [f64; 3],
+) -> [Vec<f64>; 3] {
+    let layout = &scan.pyr.layout;
+    let n_v = layout.count();
+    let l0 = layout.levels[0];
+    let (w, h) = (l0.width as f64, l0.height as f64);
+    let big_n = w.max(h);
+    let (dx, dy) = (phi.cos(), phi.sin());
+    // ω_min: the receiver's tangent plane along φ (§3).
+    let omega_min = -(normal[0] * dx + normal[1] * dy).clamp(-1.0, 1.0).asin();
+    let mut u = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    let mut running = omega_min;
+    for (i, &rad_level) in rad_levels.iter().enumerate().take(n_v) {
+        let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / scan.k_v as f64);
+        let q = [p[0] + t * dx, p[1] + t * dy];
+        if !scan.wrap
+            && (q[0] < -EDGE_TOL || q[1] < -EDGE_TOL || q[0] > w - 1.0 + EDGE_TOL || q[1] > h - 1.0 + EDGE_TOL)
+        {
+            break;
+        }
+        let level = scan_level(i, scan.k_v, scan.o_v);
+        let dh = scan.pyr.height_at(level, q[0], q[1]) - scan.pyr.height_at(level, p[0], p[1]);
+        let omega = (dh / (t * scan.texel_size)).atan();
+        if omega > running {
+            // Casting-set member (eq. 6): it is seen over [running, ω); eq. 12 telescoped.
+            let seg = nlp::interval(n, running, omega);
+            for (c, uc) in u.iter_mut().enumerate() {
+                let radiance = rad[c].height_at(rad_level, q[0], q[1]);
+                for (a, b) in uc.iter_mut().zip(&seg) {
+                    *a += radiance * b;
+                }
+            }
+            running = omega;
+        }
+    }
+    u
+}
+
+/// Direct light plus `scene.gi.bounces` indirect bounces on the CPU.
+pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
+    let direct = render_direct(scene)?;
+    let gi = &scene.gi;
+    let n = gi.sh_order;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let work = direct.work;
+    let stack = gi.pyramid == PyramidMode::Stack;
+    let pyr = CpuPyramid::build(&scene.field, work, gi.level_step, scene.wrap, stack)?;
+    let scan =
+        Scan { pyr: &pyr, k_v: gi.level_step, o_v: gi.level_offset, texel_size: scene.texel_size, wrap: scene.wrap };
+    let set = environment_set(gi.azimuths as usize, gi.interpolation);
+    let mats = wedge_matrices(n, &set, gi.interpolation);
+    let lobes = Lobes::new(scene);
+    let nrm = normals(scene);
+    let n_v = pyr.layout.count();
+    let big_n = w.max(h) as f64;
+
+    // Bounce 0: the direct exit radiance (diffuse + glossy toward the camera: the scalar
+    // radiance pyramid of §5.3).
+    let mut source: Vec<[f64; 3]> =
+        direct.direct.iter().zip(&direct.glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
+    let mut indirect_bounces = Vec::new();
+    let mut glossy_bounces = Vec::new();
+    for _ in 0..gi.bounces {
+        let rad: Vec<CpuPyramid> = (0..3)
+            .map(|c| {
+                let data = source.iter().map(|v| v[c]).collect();
+                CpuPyramid::build_f64(data, (w, h), work, gi.radiance_level_step, scene.wrap, stack)
+            })
+            .collect::<Result<_>>()?;
+        let rad: [CpuPyramid; 3] = rad.try_into().map_err(|_| crate::error::Error::Unsupported("pyramids".into()))?;
+        let n_u = rad[0].layout.count();
+        let rad_levels: Vec<usize> = (0..n_v)
+            .map(|i| {
+                let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / gi.level_step as f64);
+                radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u)
+            })
+            .collect();
+        // U at every receiver, per channel (eq. 19–21).
+        let u_grid: Vec<[Vec<f64>; 3]> = (0..work.0 * work.1)
+            .map(|r| {
+                let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
+                let normal = receiver_normal(scene, p);
+                let per_phi: Vec<[Vec<f64>; 3]> =
+                    set.phi.iter().map(|&phi| scan_radiance(&scan, &rad, &rad_levels, n, p, phi, normal)).collect();
+                [0, 1, 2].map(|c| {
+                    let v: Vec<Vec<f64>> = per_phi.iter().map(|u| u[c].clone()).collect();
+                    accumulate_with(n, &set, &mats, &v)
+                })
+            })
+            .collect();
+        let channels: [Vec<Vec<f64>>; 3] = [0, 1, 2].map(|c| u_grid.iter().map(|u| u[c].clone()).collect());
+        let mut diffuse = Vec::with_capacity(w * h);
+        let mut glossy = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
+                let uc: Vec<Vec<f64>> = channels.iter().map(|c| interpolate(c, work, xw, yw, scene.wrap)).collect();
+                let tr: Vec<[f64; 3]> = (0..n * n).map(|k| [uc[0][k], uc[1][k], uc[2][k]]).collect();
+                let (d, g) = lobes.shade(scene, x, y, nrm[y * w + x], &tr);
+                diffuse.push(d);
+                glossy.push(g);
+            }
+        }
+        source = diffuse.iter().zip(&glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
+        indirect_bounces.push(diffuse);
+        glossy_bounces.push(glossy);
+    }
+    let sum = |base: Vec<[f64; 3]>, parts: &[Vec<[f64; 3]>]| {
+        let mut out = base;
+        for p in parts {
+            for (o, v) in out.iter_mut().zip(p) {
+                for c in 0..3 {
+                    o[c] += v[c];
+                }
+            }
+        }
+        out
+    };
+    let indirect = sum(vec![[0.0; 3]; w * h], &indirect_bounces);
+    let glossy = sum(direct.glossy.clone(), &glossy_bounces);
+    let total = sum(direct.direct.clone(), &[indirect.clone(), glossy.clone()]);
+    Ok(GiOutput { direct, indirect_bounces, glossy_bounces, indirect, glossy, total })
+}
