@@ -7,7 +7,7 @@ use common::scenes::{rel_l2, scene, sky, uniform};
 use common::{gpu, rough_field};
 use hfgi::frame::{Renderer, ShadingLayers};
 use hfgi::reference::indirect::render_gi;
-use hfgi::scene::model::{Albedo, Interpolation, PyramidMode, Scene};
+use hfgi::scene::model::{Albedo, GlossyPyramid, Interpolation, PyramidMode, Scene};
 use hfgi::scene::HeightField;
 use hfgi::vk::{Context, Recorder};
 
@@ -56,12 +56,16 @@ fn bright(field: HeightField) -> Scene {
 fn gpu_matches_cpu_for_bounces_diffuse_and_glossy() {
     let ctx = gpu();
     for bounces in 1..=3 {
-        let mut s = bright(rough_field(32, 32, 7));
+        let mut s = bright(rough_field(28, 28, 7));
         s.gi.bounces = bounces;
         compare(&ctx, &s, &format!("diffuse, {bounces} bounce(s)"));
         s.material.specular = Some([0.3, 0.3, 0.3]);
         s.material.exponent = 8.0;
-        compare(&ctx, &s, &format!("glossy, {bounces} bounce(s)"));
+        compare(&ctx, &s, &format!("glossy, scalar pyramid, {bounces} bounce(s)"));
+        if bounces < 3 {
+            s.gi.glossy_pyramid = GlossyPyramid::Vector;
+            compare(&ctx, &s, &format!("glossy, vector pyramid, {bounces} bounce(s)"));
+        }
     }
 }
 
@@ -69,7 +73,7 @@ fn gpu_matches_cpu_for_bounces_diffuse_and_glossy() {
 fn gpu_matches_cpu_over_settings() {
     let ctx = gpu();
     let base = {
-        let mut s = bright(rough_field(30, 24, 3));
+        let mut s = bright(rough_field(26, 20, 3));
         s.gi.bounces = 1;
         s
     };

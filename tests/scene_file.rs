@@ -259,6 +259,7 @@ fn values_are_read() {
             radiance_level_step: 4,
             radiance_level_offset: 2,
             amortize: true,
+            glossy_pyramid: hfgi::scene::model::GlossyPyramid::Scalar,
         }
     );
     assert_eq!(s.camera.position.to_array(), [1.0, 2.0, 3.0]);

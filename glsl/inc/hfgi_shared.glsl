@@ -18,7 +18,7 @@ struct hfgi_Level {
 struct hfgi_PyramidPush {
     uint level;     // decimate: level written; synthesize: unused (z = level); probe: mode
     uint wrap;      // 1: periodic addressing, 0: clamp to edge
-    uint out_width; // working resolution of the stack / probe query count
+    uint out_width; // working resolution of the stack / probe query count; decimate: levels per channel
     uint out_height;
 };
 
@@ -57,7 +57,7 @@ struct hfgi_ShadePush {
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
 };
 
-// Push constants of the indirect scan (indirect.scan). 48 bytes.
+// Push constants of the indirect scan (indirect.scan). 64 bytes.
 struct hfgi_IndirectPush {
     uint work_width;      // receiver grid
     uint work_height;
@@ -68,17 +68,22 @@ struct hfgi_IndirectPush {
     uint stack_mode;      // 1: stack (heights and radiance), 0: true pyramids
     uint sample_count;    // azimuths m
     uint radiance_levels; // n_u, levels per channel of the radiance pyramid
+    uint radiance_stack;  // 1: the radiance pyramid is a stack
     uint pad0;
     uint pad1;
-    uint pad2;
+    vec4 specular;        // Phong k_s (vector pyramid)
 };
 
-// Push constants of radiance.gather. 16 bytes.
+// Push constants of radiance.gather. 32 bytes.
 struct hfgi_GatherPush {
     uint width;
     uint height;
     uint from_bounce;    // 0: direct exit radiance (shade planes 1 + 4), 1: bounce buffer
     uint channel_stride; // floats per channel in the radiance levels buffer
+    uint vector;         // 1: channels 0-2 diffuse only, then 3 n² incident SH channels
+    uint n2;
+    uint pad0;
+    uint pad1;
 };
 
 #endif

@@ -9,6 +9,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
+layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -21,11 +22,18 @@ layout(std430, binding = 6) readonly buffer Samples { vec4 hfgi_samples[]; }; //
 layout(std430, binding = 7) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × n
 layout(std430, binding = 8) readonly buffer RLevel { uint hfgi_radiance_level[]; }; // per scan sample
 layout(std430, binding = 9) writeonly buffer U { vec4 hfgi_u[]; };            // receivers × n²
+layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
+    float hfgi_klm[64];
+    float hfgi_zh_diffuse[8];
+    float hfgi_zh_glossy[8]; // √(4π/(2l+1)) · Phong ZH
+    uint hfgi_triple_count;
+};
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 #define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : hfgi_radiance_stack[i])
 #include "hfgi_pyramid.glsl"
 #include "hfgi_nlp.glsl"
+#include "hfgi_sh.glsl"
 
 float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_N2];
@@ -41,6 +49,43 @@ vec2 gradient(ivec2 t, bool wrap) {
     float hx = hfgi_fetch(l0, ivec2(b.x, t.y), wrap) - hfgi_fetch(l0, ivec2(a.x, t.y), wrap);
     float hy = hfgi_fetch(l0, ivec2(t.x, b.y), wrap) - hfgi_fetch(l0, ivec2(t.x, a.y), wrap);
     return vec2(hx / (float(b.x - a.x) * pc.texel_size), hy / (float(b.y - a.y) * pc.texel_size));
+}
+
+// Exit radiance of casting point q toward the receiver (docs/indirect.md §2): the diffuse RGB
+// pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
+// direction back to the receiver about q's normal.
+vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stack_mode, bool wrap) {
+    hfgi_Level r0 = hfgi_radiance_table[0];
+    uint n_u = pc.radiance_levels;
+    vec3 rad;
+    for (uint c = 0u; c < 3u; ++c) {
+        uint e = c * n_u + lv;
+        rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, stack_mode, wrap);
+    }
+    if (HFGI_VECTOR != 0) {
+        vec2 fl = floor(q);
+        vec2 f = q - fl;
+        ivec2 b = ivec2(fl);
+        vec2 g = (1.0 - f.x) * (1.0 - f.y) * gradient(b, wrap) + f.x * (1.0 - f.y) * gradient(b + ivec2(1, 0), wrap)
+               + (1.0 - f.x) * f.y * gradient(b + ivec2(0, 1), wrap) + f.x * f.y * gradient(b + ivec2(1, 1), wrap);
+        vec3 nc = normalize(vec3(-g, 1.0));
+        vec3 s = -vec3(cos(omega) * d, sin(omega));
+        hfgi_sh_eval(normalize(2.0 * dot(nc, s) * nc - s));
+        vec3 gl = vec3(0.0);
+        for (int l = 0; l < HFGI_N; ++l) {
+            for (int m = -l; m <= l; ++m) {
+                int k = l * (l + 1) + m;
+                vec3 t;
+                for (uint c = 0u; c < 3u; ++c) {
+                    uint e = (3u + 3u * uint(k) + c) * n_u + lv;
+                    t[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap);
+                }
+                gl += t * (hfgi_zh_glossy[l] * hfgi_y[k]);
+            }
+        }
+        rad += pc.specular.rgb * gl;
+    }
+    return rad;
 }
 
 void main() {
@@ -64,9 +109,6 @@ void main() {
 
     for (int i = 0; i < HFGI_NV; ++i) hfgi_base[i] = hfgi_height_at(hfgi_scan_level(i, pc.level_bias), p, work, stack_mode, wrap);
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
-    hfgi_Level r0 = hfgi_radiance_table[0];
-    uint n_u = pc.radiance_levels;
-
     for (uint j = 0u; j < pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;
         // ω_min: the tangent plane of the receiver along φ (§3).
@@ -83,12 +125,7 @@ void main() {
                 // Casting-set member (eq. 6), seen over [running, ω): eq. 12 telescoped.
                 float seg[HFGI_N];
                 hfgi_interval(running, omega, seg);
-                uint lv = hfgi_radiance_level[i];
-                vec3 rad;
-                for (uint c = 0u; c < 3u; ++c) {
-                    uint e = c * n_u + lv;
-                    rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, stack_mode, wrap);
-                }
+                vec3 rad = member_radiance(hfgi_radiance_level[i], q, omega, d, work, pc.radiance_stack != 0u, wrap);
                 for (int l = 0; l < HFGI_N; ++l) u[l] += rad * seg[l];
                 running = omega;
             }

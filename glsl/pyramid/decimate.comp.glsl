@@ -8,9 +8,12 @@ layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(push_constant) uniform Push { hfgi_PyramidPush pc; };
 #include "hfgi_filter.glsl"
 
+// Dispatch z = channel: channel c of level i is table entry c·n_levels + i (pc.out_width holds
+// n_levels in this pass).
 void main() {
-    hfgi_Level dst = hfgi_table[pc.level];
-    hfgi_Level src = hfgi_table[pc.level - 1];
+    uint e = gl_GlobalInvocationID.z * pc.out_width + pc.level;
+    hfgi_Level dst = hfgi_table[e];
+    hfgi_Level src = hfgi_table[e - 1u];
     uvec2 p = gl_GlobalInvocationID.xy;
     if (p.x >= dst.width || p.y >= dst.height) return;
     vec2 s = hfgi_rescale(vec2(p), vec2(float(dst.width), float(dst.height)), src);

@@ -1,12 +1,16 @@
 #version 460
-// Radiance pyramid, input step (NS09 §5.3; docs/indirect.md §1): level 0 of the three channel
-// pyramids ← the previous bounce's exit radiance. Bounce 1 reads the direct light (diffuse +
-// glossy toward the camera: the scalar shade pyramid); later bounces read the bounce buffer.
+// Radiance pyramid, input step (NS09 §5.3; docs/indirect.md §1): level 0 of the channel
+// pyramids ← the previous bounce's exit radiance. Bounce 1 reads the direct light (shading
+// planes), later bounces the bounce buffer (plane 0 diffuse, plane 1 glossy toward the camera).
+// Scalar pyramid: channels 0-2 = diffuse + glossy. Vector pyramid: channels 0-2 = diffuse and
+// channel 3 + 3k + c = the incident SH coefficient T_k (colour c) of the same bounce.
 #include "hfgi_shared.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(std430, binding = 0) readonly buffer Shade { vec4 hfgi_shade[]; };   // shade planes (W×H each)
-layout(std430, binding = 1) readonly buffer Bounce { vec4 hfgi_bounce[]; }; // last bounce (W×H)
+layout(std430, binding = 0) readonly buffer Shade { vec4 hfgi_shade[]; };    // shade planes (W×H each)
+layout(std430, binding = 1) readonly buffer Bounce { vec4 hfgi_bounce[]; };  // 2 planes: diffuse, glossy
 layout(std430, binding = 2) writeonly buffer Levels { float hfgi_radiance_levels[]; };
+layout(std430, binding = 3) readonly buffer IncDirect { vec4 hfgi_incident_direct[]; }; // texel × n²
+layout(std430, binding = 4) readonly buffer IncBounce { vec4 hfgi_incident_bounce[]; }; // texel × n²
 layout(push_constant) uniform Push { hfgi_GatherPush pc; };
 
 void main() {
@@ -14,6 +18,14 @@ void main() {
     if (p.x >= pc.width || p.y >= pc.height) return;
     uint idx = p.y * pc.width + p.x;
     uint plane = pc.width * pc.height;
-    vec3 c = pc.from_bounce != 0u ? hfgi_bounce[idx].rgb : hfgi_shade[plane + idx].rgb + hfgi_shade[4u * plane + idx].rgb;
+    vec3 diffuse = pc.from_bounce != 0u ? hfgi_bounce[idx].rgb : hfgi_shade[plane + idx].rgb;
+    vec3 glossy = pc.from_bounce != 0u ? hfgi_bounce[plane + idx].rgb : hfgi_shade[4u * plane + idx].rgb;
+    vec3 c = pc.vector != 0u ? diffuse : diffuse + glossy;
     for (uint ch = 0u; ch < 3u; ++ch) hfgi_radiance_levels[ch * pc.channel_stride + idx] = c[ch];
+    if (pc.vector != 0u) {
+        for (uint k = 0u; k < pc.n2; ++k) {
+            vec3 t = pc.from_bounce != 0u ? hfgi_incident_bounce[idx * pc.n2 + k].rgb : hfgi_incident_direct[idx * pc.n2 + k].rgb;
+            for (uint ch = 0u; ch < 3u; ++ch) hfgi_radiance_levels[(3u + 3u * k + ch) * pc.channel_stride + idx] = t[ch];
+        }
+    }
 }

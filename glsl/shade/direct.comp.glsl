@@ -15,6 +15,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const int HFGI_INDIRECT = 0;
+layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (glossy vector pyramid)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
@@ -29,7 +30,8 @@ layout(std430, binding = 5) readonly buffer Consts {
     uint hfgi_triple_count;
 };
 layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // 6 planes × W×H
-layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's exit radiance
+layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's diffuse, glossy planes
+layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 
@@ -135,9 +137,13 @@ void main() {
     }
     uint plane = pc.width * pc.height;
     uint idx = uint(p.y) * pc.width + uint(p.x);
+    if (HFGI_STORE_T != 0) {
+        for (int k = 0; k < HFGI_N2; ++k) hfgi_incident[idx * uint(HFGI_N2) + uint(k)] = vec4(hfgi_T[k], 0.0);
+    }
     if (HFGI_INDIRECT != 0) {
         // `direct` and `glossy` hold this bounce's diffuse and glossy exit radiance.
-        hfgi_bounce[idx] = vec4(direct + glossy, 1.0); // the next bounce's radiance (§5.3)
+        hfgi_bounce[idx] = vec4(direct, 1.0); // the next bounce's radiance (§5.3)
+        hfgi_bounce[plane + idx] = vec4(glossy, 1.0);
         if (pc.accumulate != 0u) {
             direct += hfgi_out[2u * plane + idx].rgb;
             glossy += hfgi_out[5u * plane + idx].rgb;

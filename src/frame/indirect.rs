@@ -15,7 +15,8 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
-use super::radiance::RadiancePyramid;
+use super::radiance::{RadianceInputs, RadiancePyramid};
+use super::renderer::vector_pyramid;
 use super::shade::ShadePass;
 use super::shared::{IndirectPush, ShadePush};
 use crate::error::Result;
@@ -35,13 +36,14 @@ pub struct IndirectPass {
     scan_set: vk::DescriptorSet,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
-    buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce
+    buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce, incident
     push: IndirectPush,
     shade_push: ShadePush,
 }
 
 const U: usize = 3;
 const BOUNCE: usize = 4;
+const INCIDENT: usize = 5;
 
 impl IndirectPass {
     pub fn new(ctx: &Context, pyramid: &HeightPyramid, shade: &ShadePass, scene: &Scene) -> Result<Self> {
@@ -49,6 +51,7 @@ impl IndirectPass {
         let n = gi.sh_order;
         let (w, h) = (scene.field.width(), scene.field.height());
         let (ww, wh) = pyramid.work();
+        let vector = vector_pyramid(scene);
         let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
         let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
         let fold: Vec<f32> =
@@ -66,7 +69,8 @@ impl IndirectPass {
                 ("hfgi.indirect.fold", fold.len() as u64 * 4),
                 ("hfgi.indirect.radiance_level", pyramid.layout().count() as u64 * 4),
                 ("hfgi.indirect.u", u_bytes),
-                ("hfgi.indirect.bounce", (w * h * 16) as u64),
+                ("hfgi.indirect.bounce", (2 * w * h * 16) as u64),
+                ("hfgi.indirect.incident", if vector { (w * h * n * n * 16) as u64 } else { 16 }),
             ] {
                 bufs.push(Buffer::new(ctx, name, size.max(16), usage, MemoryLocation::GpuOnly)?);
             }
@@ -77,8 +81,13 @@ impl IndirectPass {
                 gi.radiance_level_step,
                 gi.pyramid,
                 scene.wrap,
-                shade.output(),
-                &bufs[BOUNCE],
+                vector.then_some((n * n) as u32),
+                RadianceInputs {
+                    shade: shade.output(),
+                    bounce: &bufs[BOUNCE],
+                    incident_direct: shade.incident(),
+                    incident_bounce: &bufs[INCIDENT],
+                },
             )?);
             // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
             let layout = pyramid.layout();
@@ -95,13 +104,14 @@ impl IndirectPass {
             let scan = ComputePipeline::new(
                 ctx,
                 &shaders::INDIRECT_SCAN_COMP,
-                &[DescriptorKind::StorageBuffer; 10],
+                &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<IndirectPush>() as u32,
-                &[(0, n as u32), (1, layout.count() as u32)],
+                &[(0, n as u32), (1, layout.count() as u32), (2, vector as u32)],
                 1,
             )?;
             let scan = pipes.push_get(scan);
             let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
+            let [light, triple, albedo, consts, output] = shade.bindings();
             let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
             let scan_set = scan.allocate_set(
                 ctx,
@@ -116,18 +126,18 @@ impl IndirectPass {
                     Bind::Buffer(&bufs[1]),
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[U]),
+                    Bind::Buffer(consts),
                 ],
             )?;
             let sh = ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 8],
+                &[DescriptorKind::StorageBuffer; 9],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32), (1, 1)],
+                &[(0, n as u32), (1, 1), (2, vector as u32)],
                 1,
             )?;
             let sh = pipes.push_get(sh);
-            let [light, triple, albedo, consts, output] = shade.bindings();
             let shade_set = sh.allocate_set(
                 ctx,
                 &[
@@ -139,6 +149,7 @@ impl IndirectPass {
                     Bind::Buffer(consts),
                     Bind::Buffer(output),
                     Bind::Buffer(&bufs[BOUNCE]),
+                    Bind::Buffer(&bufs[INCIDENT]),
                 ],
             )?;
             Ok((scan_set, shade_set))
@@ -166,7 +177,12 @@ impl IndirectPass {
             stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
             sample_count: samples.len() as u32,
             radiance_levels: radiance.as_ref().map_or(0, |r| r.pyramid.layout().count() as u32),
-            pad: [0; 3],
+            radiance_stack: radiance.as_ref().is_some_and(|r| r.pyramid.mode() == PyramidMode::Stack) as u32,
+            pad: [0; 2],
+            specular: {
+                let k = scene.material.specular.unwrap_or([0.0; 3]);
+                [k[0], k[1], k[2], 0.0]
+            },
         };
         Ok(Self {
             radiance: radiance.expect("radiance"),

@@ -297,16 +297,14 @@ impl HeightPyramid {
             barrier::compute_to_compute(ctx, cmd);
             for i in 1..n {
                 let l = layout.levels[i as usize];
-                for c in 0..channels {
-                    let push = PyramidPush { level: c * n + i, wrap, out_width: l.width, out_height: l.height };
-                    self.decimate.dispatch(
-                        ctx,
-                        cmd,
-                        self.decimate_set,
-                        bytemuck::bytes_of(&push),
-                        [groups(l.width, 8), groups(l.height, 8), 1],
-                    );
-                }
+                let push = PyramidPush { level: i, wrap, out_width: n, out_height: 0 };
+                self.decimate.dispatch(
+                    ctx,
+                    cmd,
+                    self.decimate_set,
+                    bytemuck::bytes_of(&push),
+                    [groups(l.width, 8), groups(l.height, 8), channels],
+                );
                 barrier::compute_to_compute(ctx, cmd);
             }
         });

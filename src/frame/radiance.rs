@@ -23,14 +23,28 @@ pub const STAGE_GATHER: &str = "radiance.gather";
 pub const STAGE_DECIMATE: &str = "radiance.decimate";
 pub const STAGE_SYNTHESIZE: &str = "radiance.synthesize";
 
-/// The radiance pyramid kind: 3 channels, `source = 1`.
-pub const RADIANCE: PyramidKind = PyramidKind {
-    channels: 3,
-    source: 1,
-    stage_decimate: STAGE_DECIMATE,
-    stage_synthesize: STAGE_SYNTHESIZE,
-    label: "radiance",
-};
+/// The radiance pyramid kind: `channels` channels, `source = 1`.
+pub fn radiance_kind(channels: u32) -> PyramidKind {
+    PyramidKind {
+        channels,
+        source: 1,
+        stage_decimate: STAGE_DECIMATE,
+        stage_synthesize: STAGE_SYNTHESIZE,
+        label: "radiance",
+    }
+}
+
+/// Where the gather reads bounce `b`'s input (docs/indirect.md §1).
+pub struct RadianceInputs<'a> {
+    /// The shading planes (bounce 1: direct diffuse and direct glossy).
+    pub shade: &'a Buffer,
+    /// The previous bounce's diffuse and glossy planes (bounces > 1).
+    pub bounce: &'a Buffer,
+    /// Incident SH radiance per texel of the direct light and of the previous bounce (vector
+    /// pyramid only; any buffer otherwise).
+    pub incident_direct: &'a Buffer,
+    pub incident_bounce: &'a Buffer,
+}
 
 pub struct RadiancePyramid {
     pub pyramid: HeightPyramid,
@@ -40,8 +54,8 @@ pub struct RadiancePyramid {
 }
 
 impl RadiancePyramid {
-    /// A pyramid for a `width × height` radiance image, stack at `work`, fed from `shade`
-    /// (the shading planes) or `bounce` (the last bounce's exit radiance, `vec4` per texel).
+    /// A pyramid for a `width × height` radiance image, stack at `work`. `vector_n2`:
+    /// `Some(n²)` for the glossy vector pyramid (3 + 3n² channels, always a true pyramid).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
@@ -50,22 +64,31 @@ impl RadiancePyramid {
         k_u: u32,
         mode: PyramidMode,
         wrap: bool,
-        shade: &Buffer,
-        bounce: &Buffer,
+        vector_n2: Option<u32>,
+        inputs: RadianceInputs,
     ) -> Result<Self> {
-        let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, RADIANCE)?;
+        let (channels, mode) = match vector_n2 {
+            Some(n2) => (3 + 3 * n2, PyramidMode::Pyramid),
+            None => (3, mode),
+        };
+        let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, radiance_kind(channels))?;
         let made = (|| {
             let mut p = ComputePipeline::new(
                 ctx,
                 &shaders::RADIANCE_GATHER_COMP,
-                &[DescriptorKind::StorageBuffer; 3],
+                &[DescriptorKind::StorageBuffer; 5],
                 std::mem::size_of::<GatherPush>() as u32,
                 &[],
                 1,
             )?;
-            match p
-                .allocate_set(ctx, &[Bind::Buffer(shade), Bind::Buffer(bounce), Bind::Buffer(pyramid.levels_buffer())])
-            {
+            let binds = [
+                Bind::Buffer(inputs.shade),
+                Bind::Buffer(inputs.bounce),
+                Bind::Buffer(pyramid.levels_buffer()),
+                Bind::Buffer(inputs.incident_direct),
+                Bind::Buffer(inputs.incident_bounce),
+            ];
+            match p.allocate_set(ctx, &binds) {
                 Ok(set) => Ok((p, set)),
                 Err(e) => {
                     p.destroy(ctx);
@@ -80,6 +103,9 @@ impl RadiancePyramid {
                     height: size.1 as u32,
                     from_bounce: 0,
                     channel_stride: pyramid.layout().total as u32,
+                    vector: vector_n2.is_some() as u32,
+                    n2: vector_n2.unwrap_or(0),
+                    pad: [0; 2],
                 };
                 Ok(Self { pyramid, gather, set, push })
             }
@@ -103,6 +129,11 @@ impl RadiancePyramid {
 
     pub fn memory_bytes(&self) -> u64 {
         self.pyramid.memory_bytes()
+    }
+
+    /// Channels per level (3, or 3 + 3n² for the vector pyramid).
+    pub fn channels(&self) -> u32 {
+        3 + 3 * self.push.n2
     }
 
     pub fn destroy(mut self, ctx: &Context) {

@@ -204,3 +204,11 @@ pub fn needs_indirect(scene: &Scene) -> bool {
     let specular = m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0));
     scene.gi.bounces > 0 && (albedo || specular)
 }
+
+/// Whether the indirect light uses the glossy SH vector pyramid (docs/indirect.md §1).
+pub fn vector_pyramid(scene: &Scene) -> bool {
+    use crate::scene::model::GlossyPyramid;
+    needs_indirect(scene)
+        && scene.gi.glossy_pyramid == GlossyPyramid::Vector
+        && scene.material.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0))
+}

@@ -99,12 +99,14 @@ pub struct ShadePass {
     descriptors: vk::DescriptorSet,
     buffers: Vec<Buffer>, // light, triple, albedo, consts
     output: Buffer,
+    incident: Buffer,
     push: ShadePush,
 }
 
 impl ShadePass {
     pub fn new(ctx: &Context, pyramid: &HeightPyramid, vis: &VisibilityPass, scene: &Scene) -> Result<Self> {
         let n = scene.gi.sh_order;
+        let store_t = super::renderer::vector_pyramid(scene);
         let (w, h) = (scene.field.width(), scene.field.height());
         let light: Vec<[f32; 4]> = light_sets(scene)
             .iter()
@@ -150,12 +152,15 @@ impl ShadePass {
             });
             bufs.push(out);
             cleared?;
+            // T per texel for the glossy vector pyramid (docs/indirect.md §1); 16 bytes otherwise.
+            let inc_bytes = if store_t { (w * h * n * n * 16) as u64 } else { 16 };
+            bufs.push(Buffer::new(ctx, "hfgi.shade.incident", inc_bytes, usage, MemoryLocation::GpuOnly)?);
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 8],
+                &[DescriptorKind::StorageBuffer; 9],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32), (1, 0)],
+                &[(0, n as u32), (1, 0), (2, store_t as u32)],
                 1,
             )?);
             p.allocate_set(
@@ -169,6 +174,7 @@ impl ShadePass {
                     Bind::Buffer(&bufs[3]),
                     Bind::Buffer(&bufs[4]),
                     Bind::Buffer(&bufs[4]), // bounce output: unused by the direct mode
+                    Bind::Buffer(&bufs[5]),
                 ],
             )
         })();
@@ -182,6 +188,7 @@ impl ShadePass {
                 return Err(e);
             }
         };
+        let incident = bufs.pop().expect("incident");
         let output = bufs.pop().expect("output");
         let (ww, wh) = pyramid.work();
         let cam = scene.camera.position;
@@ -206,7 +213,7 @@ impl ShadePass {
             specular: [spec[0], spec[1], spec[2], 0.0],
             albedo,
         };
-        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, push })
+        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push })
     }
 
     pub fn record(&self, rec: &mut Recorder) {
@@ -228,6 +235,12 @@ impl ShadePass {
         [&self.buffers[0], &self.buffers[1], &self.buffers[2], &self.buffers[3], &self.output]
     }
 
+    /// The incident SH radiance `T` of the direct light per texel (`n²` vec4), written only
+    /// for the glossy vector pyramid.
+    pub fn incident(&self) -> &Buffer {
+        &self.incident
+    }
+
     /// The push constants of the direct mode.
     pub fn push(&self) -> ShadePush {
         self.push
@@ -241,12 +254,13 @@ impl ShadePass {
     }
 
     pub fn memory_bytes(&self) -> u64 {
-        self.buffers.iter().map(|b| b.size).sum::<u64>() + self.output.size
+        self.buffers.iter().map(|b| b.size).sum::<u64>() + self.output.size + self.incident.size
     }
 
     pub fn destroy(mut self, ctx: &Context) {
         self.pipeline.destroy(ctx);
         self.buffers.drain(..).for_each(|b| b.destroy(ctx));
         self.output.destroy(ctx);
+        self.incident.destroy(ctx);
     }
 }

@@ -77,7 +77,11 @@ pub struct IndirectPush {
     pub sample_count: u32,
     /// Radiance-pyramid levels per channel `n_u`.
     pub radiance_levels: u32,
-    pub pad: [u32; 3],
+    /// 1: the radiance pyramid is a stack (scalar mode with `gi.pyramid = stack`).
+    pub radiance_stack: u32,
+    pub pad: [u32; 2],
+    /// Phong `k_s` (rgb, 0): the vector pyramid's glossy lobe.
+    pub specular: [f32; 4],
 }
 
 /// `hfgi_GatherPush`: push constants of `radiance.gather`.
@@ -90,10 +94,15 @@ pub struct GatherPush {
     pub from_bounce: u32,
     /// Floats per channel in the radiance levels buffer (`PyramidLayout::total`).
     pub channel_stride: u32,
+    /// 1: vector pyramid (diffuse only in channels 0–2, incident SH in channels 3…).
+    pub vector: u32,
+    /// `n²` SH coefficients per texel of the incident buffers.
+    pub n2: u32,
+    pub pad: [u32; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<IndirectPush>() == 48);
-const _: () = assert!(std::mem::size_of::<GatherPush>() == 16);
+const _: () = assert!(std::mem::size_of::<IndirectPush>() == 64);
+const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 16);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 96);

@@ -33,6 +33,9 @@ pub struct DirectOutput {
     pub kinds: Vec<SetKind>,
     /// Full-resolution normals.
     pub normals: Vec<[f64; 3]>,
+    /// Incident SH radiance `T = Σ L ⊛ V` at every texel (`n²` RGB), the glossy vector
+    /// pyramid's input (docs/indirect.md §1).
+    pub incident: Vec<Vec<[f64; 3]>>,
 }
 
 /// Scan parameters shared by every receiver (docs/direct.md §2).
@@ -151,7 +154,8 @@ pub fn normals(scene: &Scene) -> Vec<[f64; 3]> {
 pub struct Lobes {
     n: usize,
     cc: Vec<f64>,
-    phong: Vec<f64>,
+    /// Normalised Phong lobe as ZH, canonical orientation.
+    pub phong: Vec<f64>,
 }
 
 impl Lobes {
@@ -228,6 +232,7 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
     let lobes = Lobes::new(scene);
     let mut direct = Vec::with_capacity(w * h);
     let mut glossy = Vec::with_capacity(w * h);
+    let mut incident = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
             let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
@@ -245,6 +250,7 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
             let (d, g) = lobes.shade(scene, x, y, normals[y * w + x], &tr);
             direct.push(d);
             glossy.push(g);
+            incident.push(tr);
         }
     }
     let total = direct.iter().zip(&glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
@@ -258,5 +264,6 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
         visibility,
         kinds: sets.iter().map(|s| s.0).collect(),
         normals,
+        incident,
     })
 }

@@ -6,8 +6,9 @@ use super::direct::{interpolate, normals, render_direct, scan_level, DirectOutpu
 use super::pyramid::{rescale, CpuPyramid};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
-use crate::math::nlp;
+use crate::math::{nlp, zh};
 use crate::scene::model::{PyramidMode, Scene};
+use glam::DVec3;
 
 /// Direct and indirect results of the whole pipeline.
 pub struct GiOutput {
@@ -62,16 +63,15 @@ pub fn receiver_normal(scene: &Scene, p: [f64; 2]) -> [f64; 3] {
 }
 
 /// NLP vectors `u` (per RGB channel, `n` values each) of one receiver along azimuth `phi`
-/// (eq. 6, 8, 12): the casting set above `ω_min`, each member's radiance from `rad`.
-#[allow(clippy::too_many_arguments)]
+/// (eq. 6, 8, 12): the casting set above `ω_min`; `radiance(i, q, ω_i)` is the exit radiance
+/// of casting-set member `i` at level-0 position `q` toward the receiver.
 pub fn scan_radiance(
     scan: &Scan,
-    rad: &[CpuPyramid; 3],
-    rad_levels: &[usize],
     n: usize,
     p: [f64; 2],
     phi: f64,
     normal: [f64; 3],
+    radiance: &mut dyn FnMut(usize, [f64; 2], f64) -> [f64; 3],
 ) -> [Vec<f64>; 3] {
     let layout = &scan.pyr.layout;
     let n_v = layout.count();
@@ -83,7 +83,7 @@ pub fn scan_radiance(
     let omega_min = -(normal[0] * dx + normal[1] * dy).clamp(-1.0, 1.0).asin();
     let mut u = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
     let mut running = omega_min;
-    for (i, &rad_level) in rad_levels.iter().enumerate().take(n_v) {
+    for i in 0..n_v {
         let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / scan.k_v as f64);
         let q = [p[0] + t * dx, p[1] + t * dy];
         if !scan.wrap
@@ -97,16 +97,54 @@ pub fn scan_radiance(
         if omega > running {
             // Casting-set member (eq. 6): it is seen over [running, ω); eq. 12 telescoped.
             let seg = nlp::interval(n, running, omega);
+            let rad = radiance(i, q, omega);
             for (c, uc) in u.iter_mut().enumerate() {
-                let radiance = rad[c].height_at(rad_level, q[0], q[1]);
                 for (a, b) in uc.iter_mut().zip(&seg) {
-                    *a += radiance * b;
+                    *a += rad[c] * b;
                 }
             }
             running = omega;
         }
     }
     u
+}
+
+/// The radiance pyramids of one bounce (docs/indirect.md §1): `channels[0..3]` the RGB exit
+/// radiance (scalar mode: diffuse + glossy toward the camera; vector mode: diffuse), and in
+/// vector mode `channels[3 + 3k + c]` the incident SH coefficient `T_k` of channel `c`.
+struct RadianceSource {
+    channels: Vec<CpuPyramid>,
+    levels: Vec<usize>,
+}
+
+/// Exit radiance of the casting point `q` toward the receiver (direction of elevation `ω`
+/// along `φ`, seen from the receiver), docs/indirect.md §2.
+fn member_radiance(
+    scene: &Scene,
+    src: &RadianceSource,
+    phong: &[f64],
+    i: usize,
+    q: [f64; 2],
+    omega: f64,
+    phi: f64,
+) -> [f64; 3] {
+    let level = src.levels[i];
+    let mut rad = [0, 1, 2].map(|c| src.channels[c].height_at(level, q[0], q[1]));
+    if src.channels.len() > 3 {
+        let n = scene.gi.sh_order;
+        let ks = scene.material.specular.unwrap_or([0.0; 3]);
+        // Outgoing direction s from q toward the receiver, reflected about q's normal.
+        let nc = DVec3::from_array(receiver_normal(scene, q));
+        let s = -DVec3::new(omega.cos() * phi.cos(), omega.cos() * phi.sin(), omega.sin());
+        let r = (2.0 * nc.dot(s) * nc - s).normalize();
+        let lobe = zh::rotate(n, phong, r.to_array());
+        for (k, l) in lobe.iter().enumerate() {
+            for (c, v) in rad.iter_mut().enumerate() {
+                *v += ks[c] as f64 * l * src.channels[3 + 3 * k + c].height_at(level, q[0], q[1]);
+            }
+        }
+    }
+    rad
 }
 
 /// Direct light plus `scene.gi.bounces` indirect bounces on the CPU.
@@ -127,34 +165,56 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let n_v = pyr.layout.count();
     let big_n = w.max(h) as f64;
 
-    // Bounce 0: the direct exit radiance (diffuse + glossy toward the camera: the scalar
-    // radiance pyramid of §5.3).
-    let mut source: Vec<[f64; 3]> =
-        direct.direct.iter().zip(&direct.glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
+    // Bounce 0: the direct light. Scalar pyramid: diffuse + glossy toward the camera; vector
+    // pyramid: diffuse + the incident SH radiance T (true pyramid always).
+    let vector = crate::frame::renderer::vector_pyramid(scene);
+    let add = |d: &[[f64; 3]], g: &[[f64; 3]]| -> Vec<[f64; 3]> {
+        d.iter().zip(g).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect()
+    };
+    let (mut diffuse_src, mut glossy_src, mut incident) =
+        (direct.direct.clone(), direct.glossy.clone(), direct.incident.clone());
     let mut indirect_bounces = Vec::new();
     let mut glossy_bounces = Vec::new();
     for _ in 0..gi.bounces {
-        let rad: Vec<CpuPyramid> = (0..3)
-            .map(|c| {
-                let data = source.iter().map(|v| v[c]).collect();
-                CpuPyramid::build_f64(data, (w, h), work, gi.radiance_level_step, scene.wrap, stack)
-            })
+        let mut images: Vec<Vec<f64>> = if vector {
+            (0..3).map(|c| diffuse_src.iter().map(|v| v[c]).collect()).collect()
+        } else {
+            let s = add(&diffuse_src, &glossy_src);
+            (0..3).map(|c| s.iter().map(|v| v[c]).collect()).collect()
+        };
+        if vector {
+            for k in 0..n * n {
+                for c in 0..3 {
+                    images.push(incident.iter().map(|t| t[k][c]).collect());
+                }
+            }
+        }
+        let mode_stack = stack && !vector;
+        let channels: Vec<CpuPyramid> = images
+            .into_iter()
+            .map(|data| CpuPyramid::build_f64(data, (w, h), work, gi.radiance_level_step, scene.wrap, mode_stack))
             .collect::<Result<_>>()?;
-        let rad: [CpuPyramid; 3] = rad.try_into().map_err(|_| crate::error::Error::Unsupported("pyramids".into()))?;
-        let n_u = rad[0].layout.count();
-        let rad_levels: Vec<usize> = (0..n_v)
+        let n_u = channels[0].layout.count();
+        let levels: Vec<usize> = (0..n_v)
             .map(|i| {
                 let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / gi.level_step as f64);
                 radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u)
             })
             .collect();
+        let src = RadianceSource { channels, levels };
         // U at every receiver, per channel (eq. 19–21).
         let u_grid: Vec<[Vec<f64>; 3]> = (0..work.0 * work.1)
             .map(|r| {
                 let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
                 let normal = receiver_normal(scene, p);
-                let per_phi: Vec<[Vec<f64>; 3]> =
-                    set.phi.iter().map(|&phi| scan_radiance(&scan, &rad, &rad_levels, n, p, phi, normal)).collect();
+                let per_phi: Vec<[Vec<f64>; 3]> = set
+                    .phi
+                    .iter()
+                    .map(|&phi| {
+                        let mut rad = |i, q, omega| member_radiance(scene, &src, &lobes.phong, i, q, omega, phi);
+                        scan_radiance(&scan, n, p, phi, normal, &mut rad)
+                    })
+                    .collect();
                 [0, 1, 2].map(|c| {
                     let v: Vec<Vec<f64>> = per_phi.iter().map(|u| u[c].clone()).collect();
                     accumulate_with(n, &set, &mats, &v)
@@ -162,8 +222,10 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
             })
             .collect();
         let channels: [Vec<Vec<f64>>; 3] = [0, 1, 2].map(|c| u_grid.iter().map(|u| u[c].clone()).collect());
+        drop(src);
         let mut diffuse = Vec::with_capacity(w * h);
         let mut glossy = Vec::with_capacity(w * h);
+        let mut next_incident = Vec::with_capacity(w * h);
         for y in 0..h {
             for x in 0..w {
                 let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
@@ -172,9 +234,12 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
                 let (d, g) = lobes.shade(scene, x, y, nrm[y * w + x], &tr);
                 diffuse.push(d);
                 glossy.push(g);
+                next_incident.push(tr);
             }
         }
-        source = diffuse.iter().zip(&glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
+        diffuse_src = diffuse.clone();
+        glossy_src = glossy.clone();
+        incident = next_incident;
         indirect_bounces.push(diffuse);
         glossy_bounces.push(glossy);
     }

@@ -35,7 +35,7 @@ use crate::scene::generators::Generator;
 use crate::scene::heightfield::DEFAULT_MAX_DIM;
 use crate::scene::load::{load_heightfield, LoadOptions};
 use crate::scene::model::{
-    Albedo, Camera, Environment, GiSettings, Interpolation, KeyLight, Material, PyramidMode, Scene,
+    Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Scene,
 };
 use crate::scene::HeightField;
 
@@ -205,6 +205,7 @@ struct RawGi {
     radiance_level_step: Option<u32>,
     radiance_level_offset: Option<u32>,
     amortize: Option<bool>,
+    glossy_pyramid: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -747,6 +748,12 @@ impl Ctx<'_> {
             radiance_level_step: raw.radiance_level_step.unwrap_or(d.radiance_level_step),
             radiance_level_offset: raw.radiance_level_offset.unwrap_or(d.radiance_level_offset),
             amortize: raw.amortize.unwrap_or(d.amortize),
+            glossy_pyramid: raw
+                .glossy_pyramid
+                .map(|s| s.parse::<GlossyPyramid>())
+                .transpose()
+                .map_err(param)?
+                .unwrap_or(d.glossy_pyramid),
         };
         gi.validate().map_err(param)?;
         Ok(gi)

@@ -68,6 +68,38 @@ impl std::fmt::Display for Interpolation {
     }
 }
 
+/// How glossy exit radiance enters the radiance pyramid (`gi.glossy_pyramid`, §5.3, fig. 5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GlossyPyramid {
+    /// One RGB pyramid of diffuse + glossy-toward-the-camera exit radiance (the paper's
+    /// cheaper approximation for mixtures).
+    #[default]
+    Scalar,
+    /// The diffuse RGB pyramid plus a pyramid of the incident SH radiance; the glossy lobe is
+    /// evaluated toward each receiver (converges to the ground truth).
+    Vector,
+}
+
+impl FromStr for GlossyPyramid {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "scalar" => Ok(Self::Scalar),
+            "vector" => Ok(Self::Vector),
+            _ => Err(Error::param("gi.glossy_pyramid", s, "`scalar` or `vector`")),
+        }
+    }
+}
+
+impl std::fmt::Display for GlossyPyramid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Scalar => "scalar",
+            Self::Vector => "vector",
+        })
+    }
+}
+
 /// Algorithm settings (`[gi]`). Defaults are the paper's (§9).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GiSettings {
@@ -94,6 +126,8 @@ pub struct GiSettings {
     /// Amortised shading (§7): with static heights, even frames update the direct shading
     /// and odd frames the indirect; when heights change, both.
     pub amortize: bool,
+    /// Glossy radiance pyramid (§5.3): scalar approximation or SH vector pyramid.
+    pub glossy_pyramid: GlossyPyramid,
 }
 
 impl Default for GiSettings {
@@ -111,6 +145,7 @@ impl Default for GiSettings {
             radiance_level_step: 4,
             radiance_level_offset: 2,
             amortize: true,
+            glossy_pyramid: GlossyPyramid::Scalar,
         }
     }
 }
