@@ -187,3 +187,56 @@ fn indirect_light_is_bounded_and_bounces_only_add() {
         prev_total = Some(g.total.clone());
     }
 }
+
+/// Records one frame with a stage timer; returns the timed stage names and the layers.
+fn frame(ctx: &Context, r: &mut Renderer, timer: &mut hfgi::vk::StageTimer) -> (Vec<String>, ShadingLayers) {
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(ctx, cmd, Some(&mut *timer));
+        r.record(&mut rec);
+        Ok(())
+    })
+    .unwrap();
+    let names: Vec<String> = timer.timings(ctx).unwrap().into_iter().map(|(n, _)| n).collect();
+    (names, r.read_layers(ctx).unwrap())
+}
+
+#[test]
+fn amortised_shading_alternates_direct_and_indirect_on_static_frames() {
+    let ctx = gpu();
+    let mut s = bright(rough_field(24, 24, 5));
+    s.gi.bounces = 1;
+    let shading = |names: &[String]| -> Vec<String> {
+        names.iter().filter(|n| n.starts_with("shade.") || n.starts_with("indirect.")).cloned().collect()
+    };
+    let mut timer = hfgi::vk::StageTimer::new(&ctx, 64).unwrap();
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    let (f0, l0) = frame(&ctx, &mut r, &mut timer);
+    let (f1, l1) = frame(&ctx, &mut r, &mut timer);
+    let (f2, l2) = frame(&ctx, &mut r, &mut timer);
+    eprintln!("amortised: frame 0 {f0:?}\n  frame 1 {f1:?}\n  frame 2 {f2:?}");
+    assert_eq!(shading(&f0), ["shade.direct", "indirect.scan", "indirect.shade"]);
+    assert!(f0.contains(&"pyramid.decimate".to_string()) && f0.contains(&"visibility.environment".to_string()));
+    assert_eq!(shading(&f1), ["indirect.scan", "indirect.shade"], "odd static frame: indirect only");
+    assert_eq!(shading(&f2), ["shade.direct"], "even static frame: direct only");
+    assert!(!f1.iter().chain(&f2).any(|n| n.starts_with("pyramid.") || n.starts_with("visibility.")));
+    // A static scene keeps its image: the recomposed total is the same on every frame.
+    for l in [&l1, &l2] {
+        let d = l
+            .total
+            .iter()
+            .zip(&l0.total)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+            .fold(0.0, f32::max);
+        assert!(d <= 1e-6 * max_abs(&l0.total), "amortised frames changed the total by {d:e}");
+    }
+    r.destroy(&ctx);
+    // Off: every static frame shades both.
+    s.gi.amortize = false;
+    let mut r = Renderer::new(&ctx, &s).unwrap();
+    frame(&ctx, &mut r, &mut timer);
+    let (g1, _) = frame(&ctx, &mut r, &mut timer);
+    assert_eq!(shading(&g1), ["shade.direct", "indirect.scan", "indirect.shade"]);
+    eprintln!("not amortised: static frame {g1:?}");
+    r.destroy(&ctx);
+    timer.destroy(&ctx);
+}
