@@ -55,4 +55,13 @@ struct hfgi_ShadePush {
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
 };
 
+// Push constants of the view raster pass (glsl/view/raster.vert.glsl). 80 bytes.
+struct hfgi_ViewPush {
+    mat4 view_proj;     // world → clip (Vulkan: y down, reversed depth 1 at near → 0 at far)
+    uint width;         // height-field size (vertices per row)
+    uint height;
+    float texel_size;   // world units per texel
+    uint pad;
+};
+
 #endif

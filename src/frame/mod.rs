@@ -6,6 +6,7 @@ pub mod pyramid;
 pub mod renderer;
 pub mod shade;
 pub mod shared;
+pub mod view;
 pub mod visibility;
 
 pub use renderer::{Renderer, RendererStats, ShadingLayers};
