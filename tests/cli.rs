@@ -16,8 +16,18 @@ fn help_documents_every_command_and_option() {
     }
     let (ok, render) = hfgi(&["render", "--help"]);
     assert!(ok, "{render}");
-    for opt in ["[SCENE]", "--set", "--out", "--shading-exr", "--heights-png", "--exposure", "--device", "--validation"]
-    {
+    for opt in [
+        "[SCENE]",
+        "--set",
+        "--out",
+        "--view-exr",
+        "--shading-exr",
+        "--shading-png",
+        "--heights-png",
+        "--exposure",
+        "--device",
+        "--validation",
+    ] {
         assert!(render.contains(opt), "`hfgi render --help` does not document {opt}:\n{render}");
     }
     let (ok, pyramid) = hfgi(&["pyramid", "--help"]);
@@ -60,9 +70,10 @@ fn bad_input_is_an_error_with_context_not_a_panic() {
 }
 
 #[test]
-fn render_writes_the_png_and_the_layered_shading_exr() {
+fn render_writes_the_view_png_and_exr_and_the_shading_texture() {
     let dir = tempfile::tempdir().unwrap();
     let (png, exr) = (dir.path().join("r.png"), dir.path().join("s.exr"));
+    let (view_exr, shading_png) = (dir.path().join("v.exr"), dir.path().join("s.png"));
     let (ok, msg) = hfgi(&[
         "render",
         "scenes/craters.toml",
@@ -70,15 +81,39 @@ fn render_writes_the_png_and_the_layered_shading_exr() {
         "heightfield.size=48",
         "--set",
         "gi.azimuths=8",
+        "--set",
+        "camera.width=80",
+        "--set",
+        "camera.height=50",
+        "--set",
+        "camera.position=[-10.0, -10.0, 40.0]",
+        "--set",
+        "camera.target=[23.5, 23.5, 0.0]",
         "--out",
         png.to_str().unwrap(),
+        "--view-exr",
+        view_exr.to_str().unwrap(),
         "--shading-exr",
         exr.to_str().unwrap(),
+        "--shading-png",
+        shading_png.to_str().unwrap(),
     ]);
     assert!(ok, "{msg}");
-    assert!(msg.contains("visibility.environment") && msg.contains("shade.direct"), "no stage timings:\n{msg}");
+    for stage in ["visibility.environment", "shade.direct", "view.raster"] {
+        assert!(msg.contains(stage), "no stage timing for {stage}:\n{msg}");
+    }
+    // The view image has the camera's size; the shading PNG the field's.
     let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (80, 50));
+    let img = image::open(&shading_png).unwrap();
     assert_eq!((img.width(), img.height()), (48, 48));
+    let (w, h, channels) = hfgi::io::exr::read_layers(&view_exr).unwrap();
+    assert_eq!((w, h), (80, 50));
+    let names: Vec<&str> = channels.iter().map(|(l, c, _)| if l.is_empty() { c.as_str() } else { "" }).collect();
+    assert_eq!(names, ["B", "G", "R"], "view EXR channels");
+    let g = &channels[1].2;
+    assert!(g.iter().all(|v| v.is_finite() && *v >= 0.0), "view EXR values");
+    assert!(g.iter().any(|v| *v > 0.0) && g.contains(&0.0), "the field and the background are in view");
     let (w, h, channels) = hfgi::io::exr::read_layers(&exr).unwrap();
     assert_eq!((w, h), (48, 48));
     let names: Vec<String> =

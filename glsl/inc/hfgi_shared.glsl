@@ -86,4 +86,13 @@ struct hfgi_GatherPush {
     uint pad1;
 };
 
+// Push constants of the view raster pass (glsl/view/raster.vert.glsl). 80 bytes.
+struct hfgi_ViewPush {
+    mat4 view_proj;     // world → clip (Vulkan: y down, reversed depth 1 at near → 0 at far)
+    uint width;         // height-field size (vertices per row)
+    uint height;
+    float texel_size;   // world units per texel
+    uint pad;
+};
+
 #endif

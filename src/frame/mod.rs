@@ -8,6 +8,7 @@ pub mod radiance;
 pub mod renderer;
 pub mod shade;
 pub mod shared;
+pub mod view;
 pub mod visibility;
 
 pub use renderer::{Renderer, RendererStats, ShadingLayers};

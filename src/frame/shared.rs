@@ -103,7 +103,21 @@ pub struct GatherPush {
 
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 64);
 const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
+
+/// `hfgi_ViewPush`: push constants of the view raster pass (vertex stage).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ViewPush {
+    /// World → clip, column-major (`mat4`).
+    pub view_proj: [[f32; 4]; 4],
+    pub width: u32,
+    pub height: u32,
+    pub texel_size: f32,
+    pub pad: u32,
+}
+
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 16);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 96);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
+const _: () = assert!(std::mem::size_of::<ViewPush>() == 80);

@@ -80,3 +80,54 @@ pub fn image_layout(
     let dep = vk::DependencyInfo::default().image_memory_barriers(&b);
     unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &dep) };
 }
+
+/// Compute-shader or transfer writes (heights, shading texture, index uploads) → reads by a
+/// draw: index fetch and vertex/fragment-shader storage reads.
+pub fn compute_to_graphics(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (
+            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::TRANSFER_WRITE,
+        ),
+        (
+            vk::PipelineStageFlags2::INDEX_INPUT
+                | vk::PipelineStageFlags2::VERTEX_SHADER
+                | vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            vk::AccessFlags2::INDEX_READ | vk::AccessFlags2::SHADER_STORAGE_READ,
+        ),
+    );
+}
+
+/// One layout transition for [`image_transitions`]; the aspect follows the image's format
+/// (colour or depth), mip 0 / layer 0.
+pub struct Transition<'a> {
+    pub image: &'a super::Image,
+    pub old: vk::ImageLayout,
+    pub new: vk::ImageLayout,
+    pub src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    pub dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+}
+
+/// Records several image layout transitions in one `vkCmdPipelineBarrier2`.
+pub fn image_transitions(ctx: &Context, cmd: vk::CommandBuffer, list: &[Transition]) {
+    let b: Vec<_> = list
+        .iter()
+        .map(|t| {
+            vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(t.src.0)
+                .src_access_mask(t.src.1)
+                .dst_stage_mask(t.dst.0)
+                .dst_access_mask(t.dst.1)
+                .old_layout(t.old)
+                .new_layout(t.new)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(t.image.raw)
+                .subresource_range(super::memory::range_of(t.image.format))
+        })
+        .collect();
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&b);
+    unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &dep) };
+}

@@ -209,7 +209,7 @@ impl Context {
         let (physical, family) = picked;
         let priorities = [1.0f32];
         let qci = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true);
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
         let dci = vk::DeviceCreateInfo::default().queue_create_infos(&qci).push_next(&mut f13);
         let device = match unsafe { instance.create_device(physical, &dci, None) } {
             Ok(d) => d,
@@ -255,7 +255,8 @@ impl Context {
     }
 
     /// Wraps a host engine's Vulkan objects. The device must have Vulkan 1.3 with
-    /// `synchronization2` enabled. hfgi never destroys the instance, device or allocator it was
+    /// `synchronization2` enabled (and `dynamicRendering` for the view pass,
+    /// [`crate::frame::view`]). hfgi never destroys the instance, device or allocator it was
     /// given; it destroys only the objects it created (its own command pool and fence).
     /// Validation messages are the host's business in this mode (no messenger is installed).
     pub fn from_raw(raw: RawHandles) -> Result<Self> {

@@ -163,7 +163,7 @@ impl Image {
             .image(raw)
             .view_type(vk::ImageViewType::TYPE_2D)
             .format(format)
-            .subresource_range(color_range());
+            .subresource_range(range_of(format));
         match unsafe { d.create_image_view(&vinfo, None) } {
             Ok(v) => img.view = v,
             Err(e) => {
@@ -197,6 +197,23 @@ impl Image {
 /// The single colour subresource (mip 0, layer 0).
 pub fn color_range() -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange::default().aspect_mask(vk::ImageAspectFlags::COLOR).level_count(1).layer_count(1)
+}
+
+/// The aspects of `format`: DEPTH and/or STENCIL for depth/stencil formats, COLOR otherwise.
+pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
+    match format {
+        vk::Format::D16_UNORM | vk::Format::X8_D24_UNORM_PACK32 | vk::Format::D32_SFLOAT => vk::ImageAspectFlags::DEPTH,
+        vk::Format::S8_UINT => vk::ImageAspectFlags::STENCIL,
+        vk::Format::D16_UNORM_S8_UINT | vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+/// The single subresource (mip 0, layer 0) of an image of `format`, all its aspects.
+pub fn range_of(format: vk::Format) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange::default().aspect_mask(aspect_of(format)).level_count(1).layer_count(1)
 }
 
 /// Uploads `data` into `dst` (a device buffer with TRANSFER_DST usage) at byte `offset`,
@@ -248,4 +265,27 @@ pub fn upload_f32(ctx: &Context, dst: &Buffer, offset_floats: u64, data: &[f32])
 pub fn download_f32(ctx: &Context, src: &Buffer, offset_floats: u64, count: u64) -> Result<Vec<f32>> {
     let bytes = download(ctx, src, offset_floats * 4, count * 4)?;
     Ok(bytes.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+}
+
+/// Copies mip 0 of a single-sample colour image (in `layout`, which must be TRANSFER_SRC_OPTIMAL
+/// or GENERAL, with prior writes made visible to transfer reads) into host memory and waits.
+/// Returns the texels tightly packed, row 0 first, `bytes_per_texel` each.
+pub fn download_image(ctx: &Context, image: &Image, layout: vk::ImageLayout, bytes_per_texel: u64) -> Result<Vec<u8>> {
+    let (w, h) = (u64::from(image.extent.width), u64::from(image.extent.height));
+    let len = w * h * bytes_per_texel;
+    let mut staging =
+        Buffer::new(ctx, "hfgi.staging.image", len, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)?;
+    let r = ctx
+        .submit_and_wait(|cmd| {
+            let region = [vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default().aspect_mask(vk::ImageAspectFlags::COLOR).layer_count(1),
+                )
+                .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 })];
+            unsafe { ctx.device().cmd_copy_image_to_buffer(cmd, image.raw, layout, staging.raw, &region) };
+            Ok(())
+        })
+        .and_then(|_| staging.mapped().map(|m| m[..len as usize].to_vec()));
+    staging.destroy(ctx);
+    r
 }

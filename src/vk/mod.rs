@@ -3,6 +3,7 @@
 
 pub mod barrier;
 pub mod context;
+pub mod graphics;
 pub mod memory;
 pub mod pipeline;
 pub mod recorder;
@@ -11,6 +12,7 @@ pub mod timer;
 pub use ash;
 pub use ash::vk as raw;
 pub use context::{Context, ContextOptions, DeviceInfo, RawHandles};
+pub use graphics::GraphicsPipeline;
 pub use memory::{Buffer, Image};
 pub use pipeline::{ComputePipeline, DescriptorKind};
 pub use recorder::Recorder;

@@ -15,7 +15,7 @@ pub enum DescriptorKind {
 }
 
 impl DescriptorKind {
-    fn raw(self) -> vk::DescriptorType {
+    pub(crate) fn raw(self) -> vk::DescriptorType {
         match self {
             DescriptorKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
             DescriptorKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
@@ -135,49 +135,7 @@ impl ComputePipeline {
 
     /// Allocates and writes one descriptor set; `binds[i]` goes to binding `i`.
     pub fn allocate_set(&self, ctx: &Context, binds: &[Bind]) -> Result<vk::DescriptorSet> {
-        if binds.len() != self.kinds.len() {
-            return Err(Error::param(
-                format!("{}: descriptor count", self.name),
-                binds.len(),
-                format!("{} bindings", self.kinds.len()),
-            ));
-        }
-        let d = ctx.device();
-        let layouts = [self.set_layout];
-        let ai = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.pool).set_layouts(&layouts);
-        let set = unsafe { d.allocate_descriptor_sets(&ai) }.vk("vkAllocateDescriptorSets")?[0];
-        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = binds
-            .iter()
-            .map(|b| match b {
-                Bind::Buffer(buf) => [buf.whole()],
-                Bind::Image(_) => [vk::DescriptorBufferInfo::default()],
-            })
-            .collect();
-        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = binds
-            .iter()
-            .map(|b| match b {
-                Bind::Image(img) => {
-                    [vk::DescriptorImageInfo::default().image_view(img.view).image_layout(vk::ImageLayout::GENERAL)]
-                }
-                Bind::Buffer(_) => [vk::DescriptorImageInfo::default()],
-            })
-            .collect();
-        let writes: Vec<_> = binds
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                let w = vk::WriteDescriptorSet::default()
-                    .dst_set(set)
-                    .dst_binding(i as u32)
-                    .descriptor_type(self.kinds[i].raw());
-                match b {
-                    Bind::Buffer(_) => w.buffer_info(&buffer_infos[i]),
-                    Bind::Image(_) => w.image_info(&image_infos[i]),
-                }
-            })
-            .collect();
-        unsafe { d.update_descriptor_sets(&writes, &[]) };
-        Ok(set)
+        allocate_set(ctx, &self.name, self.pool, self.set_layout, &self.kinds, binds)
     }
 
     /// Binds the pipeline and `set`, pushes `push` (must be `push_size` bytes) and dispatches
@@ -229,4 +187,57 @@ impl ComputePipeline {
 /// Workgroup count covering `n` items with groups of `size`.
 pub fn groups(n: u32, size: u32) -> u32 {
     n.div_ceil(size)
+}
+
+/// Allocates one set of `set_layout` from `pool` and writes `binds[i]` to binding `i`
+/// (shared by compute and graphics pipelines).
+pub(crate) fn allocate_set(
+    ctx: &Context,
+    name: &str,
+    pool: vk::DescriptorPool,
+    set_layout: vk::DescriptorSetLayout,
+    kinds: &[DescriptorKind],
+    binds: &[Bind],
+) -> Result<vk::DescriptorSet> {
+    if binds.len() != kinds.len() {
+        return Err(Error::param(
+            format!("{}: descriptor count", name),
+            binds.len(),
+            format!("{} bindings", kinds.len()),
+        ));
+    }
+    let d = ctx.device();
+    let layouts = [set_layout];
+    let ai = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+    let set = unsafe { d.allocate_descriptor_sets(&ai) }.vk("vkAllocateDescriptorSets")?[0];
+    let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = binds
+        .iter()
+        .map(|b| match b {
+            Bind::Buffer(buf) => [buf.whole()],
+            Bind::Image(_) => [vk::DescriptorBufferInfo::default()],
+        })
+        .collect();
+    let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = binds
+        .iter()
+        .map(|b| match b {
+            Bind::Image(img) => {
+                [vk::DescriptorImageInfo::default().image_view(img.view).image_layout(vk::ImageLayout::GENERAL)]
+            }
+            Bind::Buffer(_) => [vk::DescriptorImageInfo::default()],
+        })
+        .collect();
+    let writes: Vec<_> = binds
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let w =
+                vk::WriteDescriptorSet::default().dst_set(set).dst_binding(i as u32).descriptor_type(kinds[i].raw());
+            match b {
+                Bind::Buffer(_) => w.buffer_info(&buffer_infos[i]),
+                Bind::Image(_) => w.image_info(&image_infos[i]),
+            }
+        })
+        .collect();
+    unsafe { d.update_descriptor_sets(&writes, &[]) };
+    Ok(set)
 }

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use hfgi::frame::pyramid::{HeightPyramid, PyramidMode};
+use hfgi::frame::view::{ViewOptions, ViewPass};
 use hfgi::frame::Renderer;
 use hfgi::scene::generators::Generator;
 use hfgi::scene::load::{load_heightfield, LoadOptions};
@@ -27,10 +28,13 @@ struct Cli {
 enum Command {
     /// Render a scene file (or the default scene) and write the view image.
     ///
-    /// Writes the view image (PNG; until the camera pass exists it is the tone-mapped shading
-    /// texture), and with --shading-exr the per-texel shading texture with float32 layers
-    /// `direct`, `indirect`, `glossy` and the total in R, G, B (docs/conventions.md). Prints the
-    /// per-stage GPU timings and memory. Scene format: docs/scene-format.md.
+    /// Computes the shading texture, then rasterises the height field from the scene camera
+    /// (`[camera]`: camera.width × camera.height pixels, MSAA up to 8×; docs/view.md) and writes
+    /// that view image tone-mapped as a PNG (--out) and, with --view-exr, as linear float32 RGB.
+    /// With --shading-exr it writes the per-texel shading texture with float32 layers `direct`,
+    /// `indirect`, `glossy` and the total in R, G, B (docs/conventions.md); --shading-png writes
+    /// the total tone-mapped, seen from above (one pixel per texel). Prints the per-stage GPU
+    /// timings and memory. Scene format: docs/scene-format.md.
     Render(RenderArgs),
     /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
     Pyramid(PyramidArgs),
@@ -61,12 +65,18 @@ struct RenderArgs {
     /// Override a scene setting, e.g. `--set gi.azimuths=64 --set material.albedo=[0.5,0.5,0.5]`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
-    /// View image (PNG).
+    /// View image from the scene camera (PNG, tone-mapped with the exposure).
     #[arg(long, default_value = "out/render.png")]
     out: PathBuf,
+    /// Also write the view image as linear float32 RGB (EXR, default layer).
+    #[arg(long, value_name = "FILE")]
+    view_exr: Option<PathBuf>,
     /// Also write the shading texture as a layered float32 EXR.
     #[arg(long, value_name = "FILE")]
     shading_exr: Option<PathBuf>,
+    /// Also write the shading texture's total, tone-mapped, as a top-down PNG (one pixel per texel).
+    #[arg(long, value_name = "FILE")]
+    shading_png: Option<PathBuf>,
     /// Also write the height field as a grey PNG (black = lowest, white = highest).
     #[arg(long, value_name = "FILE")]
     heights_png: Option<PathBuf>,
@@ -171,25 +181,46 @@ fn render(a: RenderArgs) -> Result<()> {
         gi.pyramid
     );
     let mut renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
+    let view = match ViewPass::for_renderer(&ctx, &scene, &renderer, &ViewOptions::default()) {
+        Ok(v) => v,
+        Err(e) => {
+            renderer.destroy(&ctx);
+            return Err(anyhow::Error::new(e).context("creating the view pass"));
+        }
+    };
+    let (vw, vh) = view.size();
+    eprintln!("view: {vw}×{vh}, {}× MSAA, {:?}", view.samples(), view.color_format());
     let mut timer = StageTimer::new(&ctx, 32)?;
     let run = ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
         renderer.record(&mut rec);
+        // The view pass records its own compute → vertex/fragment barrier first.
+        view.record(&mut rec);
         Ok(())
     });
-    let layers = run.and_then(|_| renderer.read_layers(&ctx));
+    let read = run.and_then(|_| Ok((renderer.read_layers(&ctx)?, view.read_hdr(&ctx)?)));
     print_timings(&ctx, &timer);
-    eprintln!("  GPU memory: {:.2} MiB", renderer.memory_bytes() as f64 / 1048576.0);
+    eprintln!("  GPU memory: {:.2} MiB", (renderer.memory_bytes() + view.memory_bytes()) as f64 / 1048576.0);
+    view.destroy(&ctx);
     renderer.destroy(&ctx);
     timer.destroy(&ctx);
-    let layers = layers?;
+    let (layers, image) = read?;
     ctx.check_validation()?;
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let exposure = a.exposure.unwrap_or(scene.camera.exposure);
-    hfgi::io::png::write_tonemapped(&a.out, w, h, &layers.total, exposure)?;
+    let (vw, vh) = (vw as usize, vh as usize);
+    hfgi::io::png::write_tonemapped(&a.out, vw, vh, &image, exposure)?;
     eprintln!("wrote {}", a.out.display());
+    if let Some(path) = &a.view_exr {
+        hfgi::io::exr::write_rgb_layers(path, vw, vh, &[("", &image)])?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.shading_png {
+        hfgi::io::png::write_tonemapped(path, w, h, &layers.total, exposure)?;
+        eprintln!("wrote {}", path.display());
+    }
     if let Some(path) = &a.heights_png {
         hfgi::io::png::write_gray_normalized(path, w, h, scene.field.data())?;
         eprintln!("wrote {}", path.display());
