@@ -7,5 +7,6 @@ pub mod renderer;
 pub mod shade;
 pub mod shared;
 pub mod visibility;
+pub mod water;
 
 pub use renderer::{Renderer, RendererStats, ShadingLayers};
