@@ -99,7 +99,10 @@ fn every_example_scene_loads() {
         names.push(path.file_name().unwrap().to_string_lossy().to_string());
     }
     names.sort();
-    assert_eq!(names, ["city.toml", "cliff.toml", "craters.toml", "default.toml", "terrain-bspline.toml"]);
+    assert_eq!(
+        names,
+        ["bumps.toml", "city.toml", "cliff.toml", "craters.toml", "default.toml", "terrain-bspline.toml", "water.toml"]
+    );
 }
 
 #[test]

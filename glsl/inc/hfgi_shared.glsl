@@ -95,4 +95,17 @@ struct hfgi_ViewPush {
     uint pad;
 };
 
+// Push constants of the water step (glsl/water/step.comp.glsl). 96 bytes.
+struct hfgi_WaterPush {
+    uint width;
+    uint height;
+    uint wrap;          // 1: periodic neighbours, 0: clamp to edge (reflective wall)
+    uint drop_count;    // drops[0 .. drop_count) fall in this step
+    float k;            // Laplacian weight k = speed^2 (Courant number squared)
+    float retain;       // 1 - damping
+    float rest_level;   // output height = rest_level + scale * z
+    float scale;
+    vec4 drops[4];      // (x, y, amplitude, radius), texels
+};
+
 #endif

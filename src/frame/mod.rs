@@ -10,5 +10,6 @@ pub mod shade;
 pub mod shared;
 pub mod view;
 pub mod visibility;
+pub mod water;
 
 pub use renderer::{Renderer, RendererStats, ShadingLayers};

@@ -116,7 +116,26 @@ pub struct ViewPush {
     pub pad: u32,
 }
 
+/// `hfgi_WaterPush`: push constants of the water step (`docs/dynamic.md`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct WaterPush {
+    pub width: u32,
+    pub height: u32,
+    pub wrap: u32,
+    pub drop_count: u32,
+    /// Laplacian weight `k = speed²`.
+    pub k: f32,
+    /// `1 − damping`.
+    pub retain: f32,
+    pub rest_level: f32,
+    pub scale: f32,
+    /// `(x, y, amplitude, radius)` of up to 4 drops (the first `drop_count` are used).
+    pub drops: [[f32; 4]; 4],
+}
+
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 16);
+const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 96);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);

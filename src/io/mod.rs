@@ -1,3 +1,4 @@
-//! Image output: OpenEXR layers and 8-bit PNG previews.
+//! Image output: OpenEXR layers, 8-bit PNG previews and animated GIFs.
 pub mod exr;
+pub mod gif;
 pub mod png;

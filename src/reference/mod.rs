@@ -3,3 +3,4 @@
 pub mod direct;
 pub mod indirect;
 pub mod pyramid;
+pub mod water;

@@ -30,6 +30,7 @@ use serde::Deserialize;
 use toml::{Table, Value};
 
 use crate::error::{Error, Result};
+use crate::scene::animated::{Animation, Boundary, BumpParams, BumpShape, Rain, WaterParams};
 use crate::scene::envmap::{self, Preset};
 use crate::scene::generators::Generator;
 use crate::scene::heightfield::DEFAULT_MAX_DIM;
@@ -132,7 +133,8 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let key_lights = ctx.key_lights(raw.key_light.as_deref().unwrap_or(&[]))?;
     let gi = ctx.gi(raw.gi.as_ref())?;
     let camera = ctx.camera(raw.camera.as_ref(), &field, texel_size)?;
-    Ok(Scene { field, texel_size, wrap, material, environment, key_lights, gi, camera })
+    let animation = ctx.animation(raw.animation.as_ref(), wrap)?;
+    Ok(Scene { field, texel_size, wrap, material, environment, key_lights, gi, camera, animation })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -148,6 +150,7 @@ struct RawScene {
     key_light: Option<Vec<Table>>,
     gi: Option<Table>,
     camera: Option<Table>,
+    animation: Option<Table>,
 }
 
 #[derive(Deserialize, Default)]
@@ -217,6 +220,30 @@ struct RawCamera {
     width: Option<u32>,
     height: Option<u32>,
     exposure: Option<f64>,
+}
+
+/// `[animation]`: the keys of every kind; [`Ctx::animation`] rejects those of another kind.
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawAnimation {
+    kind: Option<String>,
+    seed: Option<u64>,
+    // water
+    speed: Option<f64>,
+    damping: Option<f64>,
+    steps_per_frame: Option<u32>,
+    rest_level: Option<f64>,
+    scale: Option<f64>,
+    rain_rate: Option<f64>,
+    drop_amplitude: Option<f64>,
+    drop_radius: Option<f64>,
+    // bumps
+    count: Option<u32>,
+    radius: Option<f64>,
+    amplitude: Option<f64>,
+    period: Option<u32>,
+    travel: Option<f64>,
+    shape: Option<String>,
 }
 
 /// `n` (square) or `[w, h]`.
@@ -806,6 +833,76 @@ impl Ctx<'_> {
             cam.exposure = self.finite_f32("camera.exposure", e, true, "a finite number (stops)")?;
         }
         Ok(cam)
+    }
+}
+
+impl Ctx<'_> {
+    /// `[animation]`: `kind` picks the parameter set; a key of another kind is an error naming
+    /// it (with `kind = "none"` the other keys are type-checked and ignored).
+    fn animation(&self, t: Option<&Table>, wrap: bool) -> Result<Animation> {
+        const WATER: &[&str] = &[
+            "speed",
+            "damping",
+            "steps_per_frame",
+            "rest_level",
+            "scale",
+            "rain_rate",
+            "drop_amplitude",
+            "drop_radius",
+        ];
+        const BUMPS: &[&str] = &["count", "radius", "amplitude", "period", "travel", "shape"];
+        let Some(t) = t else { return Ok(Animation::None) };
+        let raw: RawAnimation = self.de_table(t, "animation")?;
+        let kind = raw.kind.as_deref().unwrap_or("none");
+        let (own, other, other_kind): (&[&str], &[&str], &str) = match kind {
+            "none" => return Ok(Animation::None),
+            "water" => (WATER, BUMPS, "bumps"),
+            "bumps" => (BUMPS, WATER, "water"),
+            _ => return Err(self.invalid("animation.kind", format!("{kind:?}"), "\"none\", \"water\" or \"bumps\"")),
+        };
+        if let Some(k) = t.keys().find(|k| other.contains(&k.as_str())) {
+            let key = format!("animation.{k}");
+            return Err(self.err(
+                Some(&key),
+                format!(
+                    "{key} applies to kind = \"{other_kind}\" only; with kind = \"{kind}\" the keys are: kind, seed, {}",
+                    own.join(", ")
+                ),
+            ));
+        }
+        let check = |e: Error| self.wrap("animation", e);
+        if kind == "water" {
+            let d = WaterParams::default();
+            let p = WaterParams {
+                speed: raw.speed.unwrap_or(d.speed),
+                damping: raw.damping.unwrap_or(d.damping),
+                steps_per_frame: raw.steps_per_frame.unwrap_or(d.steps_per_frame),
+                rest_level: raw.rest_level.unwrap_or(d.rest_level),
+                scale: raw.scale.unwrap_or(d.scale),
+                boundary: Boundary::from_wrap(wrap),
+                rain: Rain {
+                    rate: raw.rain_rate.unwrap_or(d.rain.rate),
+                    amplitude: raw.drop_amplitude.unwrap_or(d.rain.amplitude),
+                    radius: raw.drop_radius.unwrap_or(d.rain.radius),
+                    seed: raw.seed.unwrap_or(d.rain.seed),
+                },
+            };
+            p.validate().map_err(check)?;
+            Ok(Animation::Water(p))
+        } else {
+            let d = BumpParams::default();
+            let p = BumpParams {
+                seed: raw.seed.unwrap_or(d.seed),
+                count: raw.count.unwrap_or(d.count),
+                radius: raw.radius.unwrap_or(d.radius),
+                amplitude: raw.amplitude.unwrap_or(d.amplitude),
+                period: raw.period.unwrap_or(d.period),
+                travel: raw.travel.unwrap_or(d.travel),
+                shape: raw.shape.map(|s| s.parse::<BumpShape>()).transpose().map_err(check)?.unwrap_or(d.shape),
+            };
+            p.validate().map_err(check)?;
+            Ok(Animation::Bumps(p))
+        }
     }
 }
 

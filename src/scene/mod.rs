@@ -1,4 +1,5 @@
 //! Scenes and height fields: the type, procedural generators and file loaders.
+pub mod animated;
 pub mod envmap;
 pub mod file;
 pub mod generators;

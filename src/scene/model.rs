@@ -6,6 +6,7 @@ use std::str::FromStr;
 use glam::DVec3;
 
 use crate::error::{Error, Result};
+pub use crate::scene::animated::Animation;
 use crate::scene::HeightField;
 
 /// How the height pyramid is stored and sampled (`gi.pyramid`).
@@ -240,6 +241,8 @@ pub struct Scene {
     pub key_lights: Vec<KeyLight>,
     pub gi: GiSettings,
     pub camera: Camera,
+    /// `[animation]`: what moves (`Animation::None` for a static scene).
+    pub animation: Animation,
 }
 
 impl GiSettings {

@@ -43,6 +43,7 @@ pub fn scene(field: HeightField) -> Scene {
         key_lights: vec![key_light(30.0, 200.0, 5.0, 4.0)],
         gi: GiSettings::default(),
         camera,
+        animation: Default::default(),
     }
 }
 

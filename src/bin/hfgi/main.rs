@@ -6,7 +6,9 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use hfgi::frame::pyramid::{HeightPyramid, PyramidMode};
 use hfgi::frame::view::{ViewOptions, ViewPass};
+use hfgi::frame::water::WaterSim;
 use hfgi::frame::Renderer;
+use hfgi::scene::animated::{Animation, MovingBumps};
 use hfgi::scene::generators::Generator;
 use hfgi::scene::load::{load_heightfield, LoadOptions};
 use hfgi::scene::HeightField;
@@ -36,6 +38,13 @@ enum Command {
     /// the total tone-mapped, seen from above (one pixel per texel). Prints the per-stage GPU
     /// timings and memory. Scene format: docs/scene-format.md.
     Render(RenderArgs),
+    /// Render an animated scene (its [animation] table: water or moving bumps) frame by frame.
+    ///
+    /// Creates one renderer (and one water simulation), then per frame advances the animation,
+    /// records the frame and writes DIR/frame_0000.png, frame_0001.png, …; optionally an
+    /// animated GIF. Prints the renderer's counters, the pipelines created before and after the
+    /// loop, and the median per-stage time. See docs/dynamic.md.
+    Animate(AnimateArgs),
     /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
     Pyramid(PyramidArgs),
     /// List the Vulkan devices and which one hfgi would choose.
@@ -81,6 +90,32 @@ struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     heights_png: Option<PathBuf>,
     /// Exposure in stops for the PNG (default: the scene camera's), e.g. `--exposure=-1.5`.
+    #[arg(long, allow_hyphen_values = true)]
+    exposure: Option<f32>,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct AnimateArgs {
+    /// Scene file (TOML) with an [animation] table (docs/scene-format.md).
+    scene: PathBuf,
+    /// Number of frames to render (≥ 1).
+    #[arg(long)]
+    frames: u32,
+    /// Output folder for frame_0000.png, frame_0001.png, … (created if missing).
+    #[arg(long, default_value = "out/animate")]
+    out: PathBuf,
+    /// Override a scene setting, e.g. `--set animation.kind=water --set animation.rain_rate=1`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Also write the frames as an animated GIF (looping).
+    #[arg(long, value_name = "FILE")]
+    gif: Option<PathBuf>,
+    /// Frame rate of the GIF, in (0, 100].
+    #[arg(long, default_value_t = 25.0)]
+    fps: f64,
+    /// Exposure in stops for the frames (default: the scene camera's).
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
     #[command(flatten)]
@@ -190,7 +225,7 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let (vw, vh) = view.size();
     eprintln!("view: {vw}×{vh}, {}× MSAA, {:?}", view.samples(), view.color_format());
-    let mut timer = StageTimer::new(&ctx, 32)?;
+    let mut timer = StageTimer::new(&ctx, 32 + 5 * scene.gi.bounces)?;
     let run = ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
         renderer.record(&mut rec);
@@ -238,6 +273,221 @@ fn render(a: RenderArgs) -> Result<()> {
             ],
         )?;
         eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// The picture of the current frame: `(width, height, linear RGB)`, the rasterised view image.
+fn frame_rgb(ctx: &Context, view: &ViewPass) -> hfgi::Result<(usize, usize, Vec<[f32; 3]>)> {
+    let (w, h) = view.size();
+    Ok((w as usize, h as usize, view.read_hdr(ctx)?))
+}
+
+/// What advances the heights between frames.
+enum Driver {
+    Water(Box<WaterSim>),
+    Bumps(MovingBumps),
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn animate(a: AnimateArgs) -> Result<()> {
+    if a.frames == 0 {
+        bail!("--frames 0: expected at least 1 frame");
+    }
+    if !(a.fps.is_finite() && a.fps > 0.0 && a.fps <= 100.0) {
+        bail!("--fps {}: expected a number in (0, 100]", a.fps);
+    }
+    let scene = hfgi::scene::file::load_scene(&a.scene, &a.overrides)
+        .with_context(|| format!("loading scene {}", a.scene.display()))?;
+    if scene.animation == Animation::None {
+        bail!(
+            "{}: the scene does not move ([animation] kind = \"none\"); add an [animation] table \
+             (docs/scene-format.md) or e.g. --set animation.kind=water",
+            a.scene.display()
+        );
+    }
+    let exposure = a.exposure.unwrap_or(scene.camera.exposure);
+    if !exposure.is_finite() {
+        bail!("--exposure {exposure}: expected a finite number of stops");
+    }
+    let ctx = context(&a.device)?;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let max = ctx.info().max_image_dimension_2d as usize;
+    if w > max || h > max {
+        bail!("height field {w}×{h} exceeds this device's maxImageDimension2D {max}");
+    }
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    eprintln!(
+        "device: {} ({}); field {w}×{h}; animation {}; {} frames",
+        ctx.info().name,
+        ctx.info().driver,
+        scene.animation.kind(),
+        a.frames
+    );
+    let mut renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
+    let driver = match &scene.animation {
+        Animation::Water(p) => {
+            // The scene's heights are the initial surface: z = (height − rest_level) / scale.
+            let initial: Vec<f32> =
+                scene.field.data().iter().map(|&v| ((f64::from(v) - p.rest_level) / p.scale) as f32).collect();
+            WaterSim::new(&ctx, w, h, p.clone(), &initial).map(|s| Driver::Water(Box::new(s)))
+        }
+        Animation::Bumps(p) => {
+            MovingBumps::new(p.clone(), scene.field.clone(), scene.texel_size, scene.wrap).map(Driver::Bumps)
+        }
+        Animation::None => Err(hfgi::Error::param("animation.kind", "\"none\"", "\"water\" or \"bumps\"")),
+    };
+    let mut driver = match driver {
+        Ok(d) => d,
+        Err(e) => {
+            renderer.destroy(&ctx);
+            return Err(e).context("creating the animation");
+        }
+    };
+    let steps = match &driver {
+        Driver::Water(sim) => sim.params().steps_per_frame,
+        Driver::Bumps(_) => 0,
+    };
+    // Near/far planes: the first frame's range, widened for water by the waves a drop can
+    // raise (4 × the drop amplitude, in world units); bumps update it every frame.
+    let (lo, hi) = scene.field.range();
+    let margin = match &scene.animation {
+        Animation::Water(p) => (4.0 * p.rain.amplitude.abs().max(1.0) * p.scale.abs()) as f32,
+        _ => 0.0,
+    };
+    let mut view = match ViewPass::for_renderer(&ctx, &scene, &renderer, &ViewOptions::default())
+        .and_then(|mut v| v.set_height_range(lo - margin, hi + margin).map(|_| v))
+    {
+        Ok(v) => v,
+        Err(e) => {
+            if let Driver::Water(sim) = driver {
+                sim.destroy(&ctx);
+            }
+            renderer.destroy(&ctx);
+            return Err(anyhow::Error::new(e).context("creating the view pass"));
+        }
+    };
+    let mut timer = match StageTimer::new(&ctx, steps + 32 + 5 * scene.gi.bounces) {
+        Ok(t) => t,
+        Err(e) => {
+            if let Driver::Water(sim) = driver {
+                sim.destroy(&ctx);
+            }
+            renderer.destroy(&ctx);
+            return Err(e.into());
+        }
+    };
+
+    let pipelines_before = ctx.pipelines_created();
+    let bar = indicatif::ProgressBar::new(u64::from(a.frames));
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{msg} {wide_bar} {pos}/{len} frames [{elapsed} < {eta}]")
+    {
+        bar.set_style(style);
+    }
+    bar.set_message("animate");
+    let mut stage_ms: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut timing_note = None;
+    let mut gif_frames = Vec::new();
+    let run = (|| -> Result<()> {
+        for f in 0..a.frames {
+            if let Driver::Bumps(b) = &driver {
+                let field = b.heights_at(u64::from(f))?;
+                renderer.update_heights(&ctx, &field)?;
+                let (lo, hi) = field.range();
+                view.set_height_range(lo, hi)?;
+            }
+            ctx.submit_and_wait(|cmd| {
+                let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
+                if let Driver::Water(sim) = &mut driver {
+                    for _ in 0..steps {
+                        sim.record_step(&mut rec, renderer.heights_buffer())?;
+                    }
+                    renderer.mark_heights_changed();
+                }
+                renderer.record(&mut rec);
+                view.record(&mut rec);
+                Ok(())
+            })?;
+            match timer.timings(&ctx) {
+                Ok(t) => {
+                    // Sum the scopes of one stage within the frame (several water steps).
+                    let mut frame: Vec<(String, f64)> = Vec::new();
+                    for (name, ms) in t {
+                        match frame.iter_mut().find(|(n, _)| *n == name) {
+                            Some((_, acc)) => *acc += ms,
+                            None => frame.push((name, ms)),
+                        }
+                    }
+                    for (name, ms) in frame {
+                        match stage_ms.iter_mut().find(|(n, _)| *n == name) {
+                            Some((_, v)) => v.push(ms),
+                            None => stage_ms.push((name, vec![ms])),
+                        }
+                    }
+                }
+                Err(e) => timing_note = Some(e.to_string()),
+            }
+            let (fw, fh, rgb) = frame_rgb(&ctx, &view)?;
+            let path = a.out.join(format!("frame_{f:04}.png"));
+            hfgi::io::png::write_tonemapped(&path, fw, fh, &rgb, exposure)?;
+            if a.gif.is_some() {
+                gif_frames.push((fw, fh, hfgi::io::gif::tonemap_rgba8(&rgb, exposure)?));
+            }
+            bar.inc(1);
+        }
+        Ok(())
+    })();
+    bar.finish_and_clear();
+    let pipelines_after = ctx.pipelines_created();
+    let stats = renderer.stats();
+    let memory = renderer.memory_bytes() + view.memory_bytes();
+    if let Driver::Water(sim) = driver {
+        sim.destroy(&ctx);
+    }
+    view.destroy(&ctx);
+    renderer.destroy(&ctx);
+    timer.destroy(&ctx);
+    run?;
+    ctx.check_validation()?;
+    eprintln!("wrote {}/frame_0000.png … frame_{:04}.png ({} frames)", a.out.display(), a.frames - 1, a.frames);
+    if let (Some(path), Some((fw, fh, _))) = (&a.gif, gif_frames.first()) {
+        let (fw, fh) = (*fw, *fh);
+        let frames: Vec<Vec<u8>> = gif_frames.into_iter().map(|(_, _, f)| f).collect();
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+        hfgi::io::gif::write_gif(path, fw, fh, &frames, a.fps)?;
+        eprintln!("wrote {} ({} fps)", path.display(), a.fps);
+    }
+    eprintln!("frames: {}", a.frames);
+    eprintln!("renderer stats: frames {}, pyramid_builds {}", stats.frames, stats.pyramid_builds);
+    eprintln!("pipelines created: {pipelines_before} before the loop, {pipelines_after} after");
+    eprintln!("GPU memory (renderer + view): {:.2} MiB", memory as f64 / 1048576.0);
+    let lavapipe = ctx.info().kind == ash::vk::PhysicalDeviceType::CPU;
+    let label = if lavapipe { " (lavapipe: CPU time, not a GPU time)" } else { "" };
+    match timing_note {
+        Some(note) if stage_ms.is_empty() => eprintln!("no stage timings: {note}"),
+        _ => {
+            eprintln!("median per-stage time over {} frames, {} ({}):", a.frames, ctx.info().name, ctx.info().driver);
+            for (stage, mut v) in stage_ms {
+                eprintln!("  {stage:<24} {:9.3} ms{label} ({} frames)", median(&mut v), v.len());
+            }
+        }
+    }
+    if pipelines_after != pipelines_before {
+        bail!("pipelines were created during the frame loop ({pipelines_before} → {pipelines_after})");
     }
     Ok(())
 }
@@ -372,6 +622,7 @@ fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Render(a) => render(a),
+        Command::Animate(a) => animate(a),
         Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),
         Command::Spirv { out } => spirv(&out),
