@@ -374,8 +374,12 @@ fn sixty_water_frames_through_the_renderer() {
     let mut s = scene(field);
     s.gi.azimuths = 8;
     s.gi.key_light_azimuths = 2;
+    s.gi.bounces = 1;
+    s.camera.width = 48;
+    s.camera.height = 32;
     let params = WaterParams { steps_per_frame: 1, rain: rain(0.5), ..WaterParams::default() };
     let mut renderer = Renderer::new(&ctx, &s).unwrap();
+    let view = hfgi::frame::view::ViewPass::for_renderer(&ctx, &s, &renderer, &Default::default()).unwrap();
     let mut sim = WaterSim::new(&ctx, n, n, params.clone(), &initial).unwrap();
     let mut cpu = WaterCpu::new(n, n, params, &initial).unwrap();
     let before = ctx.pipelines_created();
@@ -387,11 +391,18 @@ fn sixty_water_frames_through_the_renderer() {
                 sim.record_step(&mut rec, renderer.heights_buffer())?;
                 renderer.mark_heights_changed();
                 renderer.record(&mut rec);
+                view.record(&mut rec);
                 Ok(rec.stages().to_vec())
             })
             .unwrap();
         cpu.step();
         assert_eq!(&stages[..2], &[STAGE_STEP.to_string(), STAGE_DECIMATE.to_string()], "frame {f}");
+        for st in ["shade.direct", "indirect.scan", "view.raster"] {
+            assert!(stages.iter().any(|x| x == st), "frame {f}: no {st} in {stages:?}");
+        }
+        if f == 0 {
+            eprintln!("water frame stages: {stages:?}");
+        }
         if f == 0 {
             first = Some(renderer.read_layers(&ctx).unwrap().total);
         }
@@ -419,7 +430,14 @@ fn sixty_water_frames_through_the_renderer() {
     assert!(!stages.iter().any(|s| s == STAGE_DECIMATE), "rebuilt without a change: {stages:?}");
     assert_eq!((renderer.stats().frames, renderer.stats().pyramid_builds), (61, 60));
     assert_eq!(ctx.pipelines_created(), before);
+    eprintln!(
+        "60 water frames: {} pipelines created before the loop, {} after; {:?}",
+        before,
+        ctx.pipelines_created(),
+        renderer.stats()
+    );
     sim.destroy(&ctx);
+    view.destroy(&ctx);
     renderer.destroy(&ctx);
 }
 
@@ -439,6 +457,10 @@ fn cli_animate_writes_pngs_and_a_gif() {
             "gi.azimuths=8",
             "--set",
             "animation.rain_rate=2",
+            "--set",
+            "camera.width=64",
+            "--set",
+            "camera.height=40",
             "--out",
             dir.path().join("frames").to_str().unwrap(),
             "--gif",
@@ -454,7 +476,7 @@ fn cli_animate_writes_pngs_and_a_gif() {
     eprintln!("{msg}");
     for f in 0..3 {
         let img = image::open(dir.path().join(format!("frames/frame_{f:04}.png"))).unwrap();
-        assert_eq!((img.width(), img.height()), (32, 32));
+        assert_eq!((img.width(), img.height()), (64, 40), "frames are the camera's view image");
     }
     assert!(!dir.path().join("frames/frame_0003.png").exists());
     let bytes = std::fs::read(&gif).unwrap();
@@ -462,7 +484,7 @@ fn cli_animate_writes_pngs_and_a_gif() {
     let decoder = image::codecs::gif::GifDecoder::new(std::io::Cursor::new(bytes)).unwrap();
     let frames = image::AnimationDecoder::into_frames(decoder).collect_frames().unwrap();
     assert_eq!(frames.len(), 3);
-    for needle in ["frames: 3", "pyramid_builds 3", "water.step", "pyramid.decimate", "median"] {
+    for needle in ["frames: 3", "pyramid_builds 3", "water.step", "pyramid.decimate", "view.raster", "median"] {
         assert!(msg.contains(needle), "missing `{needle}` in:\n{msg}");
     }
     let line = msg.lines().find(|l| l.starts_with("pipelines created")).unwrap();

@@ -23,6 +23,8 @@ pub struct ShadingLayers {
     pub direct: Vec<[f32; 3]>,
     pub indirect: Vec<[f32; 3]>,
     pub glossy: Vec<[f32; 3]>,
+    /// The indirect part of `glossy` (not exported; for comparisons such as figure 5).
+    pub indirect_glossy: Vec<[f32; 3]>,
 }
 
 /// Counters that show what a frame did (for tests and the `animate` report).
@@ -170,6 +172,7 @@ impl Renderer {
             direct: self.shade.read_layer(ctx, LAYER_DIRECT)?,
             indirect: self.shade.read_layer(ctx, LAYER_INDIRECT)?,
             glossy: self.shade.read_layer(ctx, LAYER_GLOSSY)?,
+            indirect_glossy: self.shade.read_layer(ctx, super::shade::PLANE_GLOSSY_INDIRECT)?,
         })
     }
 

@@ -86,6 +86,10 @@ struct RenderArgs {
     /// Also write the shading texture's total, tone-mapped, as a top-down PNG (one pixel per texel).
     #[arg(long, value_name = "FILE")]
     shading_png: Option<PathBuf>,
+    /// Also write the indirect light of the shading texture (diffuse + glossy indirect, all
+    /// bounces) as a tone-mapped PNG seen from above.
+    #[arg(long, value_name = "FILE")]
+    indirect_png: Option<PathBuf>,
     /// Also write the height field as a grey PNG (black = lowest, white = highest).
     #[arg(long, value_name = "FILE")]
     heights_png: Option<PathBuf>,
@@ -254,6 +258,16 @@ fn render(a: RenderArgs) -> Result<()> {
     }
     if let Some(path) = &a.shading_png {
         hfgi::io::png::write_tonemapped(path, w, h, &layers.total, exposure)?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(path) = &a.indirect_png {
+        let ind: Vec<[f32; 3]> = layers
+            .indirect
+            .iter()
+            .zip(&layers.indirect_glossy)
+            .map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]])
+            .collect();
+        hfgi::io::png::write_tonemapped(path, w, h, &ind, exposure)?;
         eprintln!("wrote {}", path.display());
     }
     if let Some(path) = &a.heights_png {
