@@ -503,3 +503,114 @@ fn cli_animate_writes_pngs_and_a_gif() {
     let (ok, msg) = run(&["animate", "scenes/water.toml", "--frames", "0"]);
     assert!(!ok && msg.contains("--frames") && !msg.contains("panicked"), "{msg}");
 }
+
+#[test]
+fn heights_from_a_host_gpu_image() {
+    // A host engine keeps its heights in an R32_SFLOAT image: the renderer copies them in the
+    // host's command buffer (stage `heights.copy`) and rebuilds the pyramid from them.
+    let ctx = gpu();
+    let (w, h) = (24usize, 20usize);
+    let data: Vec<f32> = (0..w * h).map(|k| ((k % w) as f32 * 0.37).sin() * 3.0 + (k / w) as f32 * 0.1).collect();
+    let mut s = scene(HeightField::new("zero", w, h, vec![0.0; w * h], 16384).unwrap());
+    s.gi.azimuths = 8;
+    let mut renderer = Renderer::new(&ctx, &s).unwrap();
+    let usage = raw::ImageUsageFlags::TRANSFER_SRC | raw::ImageUsageFlags::TRANSFER_DST | raw::ImageUsageFlags::STORAGE;
+    let extent = raw::Extent2D { width: w as u32, height: h as u32 };
+    let image = hfgi::vk::Image::new(
+        &ctx,
+        "test.host.heights",
+        extent,
+        raw::Format::R32_SFLOAT,
+        usage,
+        raw::SampleCountFlags::TYPE_1,
+    )
+    .unwrap();
+    let staging = Buffer::new(
+        &ctx,
+        "test.staging",
+        (w * h * 4) as u64,
+        raw::BufferUsageFlags::TRANSFER_SRC | raw::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )
+    .unwrap();
+    memory::upload_f32(&ctx, &staging, 0, &data).unwrap();
+    // Bad inputs are typed errors, not panics.
+    let bad = ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(&ctx, cmd, None);
+        let e1 = renderer.record_heights_from_image(
+            &mut rec,
+            image.raw,
+            raw::Format::R8_UNORM,
+            (w as u32, h as u32),
+            raw::ImageLayout::GENERAL,
+        );
+        let e2 = renderer.record_heights_from_image(
+            &mut rec,
+            image.raw,
+            raw::Format::R32_SFLOAT,
+            (3, 3),
+            raw::ImageLayout::GENERAL,
+        );
+        Ok((e1.is_err(), e2.is_err(), rec.stages().to_vec()))
+    });
+    let (e1, e2, none) = bad.unwrap();
+    assert!(e1 && e2 && none.is_empty());
+    let stages = ctx
+        .submit_and_wait(|cmd| {
+            let d = ctx.device();
+            let range = hfgi::vk::memory::color_range();
+            let to_dst = [raw::ImageMemoryBarrier2::default()
+                .dst_stage_mask(raw::PipelineStageFlags2::COPY)
+                .dst_access_mask(raw::AccessFlags2::TRANSFER_WRITE)
+                .old_layout(raw::ImageLayout::UNDEFINED)
+                .new_layout(raw::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .image(image.raw)
+                .subresource_range(range)];
+            unsafe { d.cmd_pipeline_barrier2(cmd, &raw::DependencyInfo::default().image_memory_barriers(&to_dst)) };
+            let region = raw::BufferImageCopy::default()
+                .image_subresource(raw::ImageSubresourceLayers {
+                    aspect_mask: raw::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                })
+                .image_extent(raw::Extent3D { width: w as u32, height: h as u32, depth: 1 });
+            unsafe {
+                d.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    image.raw,
+                    raw::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
+            };
+            let to_src = [raw::ImageMemoryBarrier2::default()
+                .src_stage_mask(raw::PipelineStageFlags2::COPY)
+                .src_access_mask(raw::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(raw::PipelineStageFlags2::COPY)
+                .dst_access_mask(raw::AccessFlags2::TRANSFER_READ)
+                .old_layout(raw::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .new_layout(raw::ImageLayout::TRANSFER_SRC_OPTIMAL)
+                .image(image.raw)
+                .subresource_range(range)];
+            unsafe { d.cmd_pipeline_barrier2(cmd, &raw::DependencyInfo::default().image_memory_barriers(&to_src)) };
+            let mut rec = Recorder::new(&ctx, cmd, None);
+            renderer.record_heights_from_image(
+                &mut rec,
+                image.raw,
+                raw::Format::R32_SFLOAT,
+                (w as u32, h as u32),
+                raw::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            )?;
+            renderer.record(&mut rec);
+            Ok(rec.stages().to_vec())
+        })
+        .unwrap();
+    eprintln!("host image frame: {stages:?}");
+    assert_eq!(&stages[..2], &["heights.copy".to_string(), STAGE_DECIMATE.to_string()]);
+    let level0 = renderer.pyramid.read_level(&ctx, 0).unwrap();
+    assert_eq!(level0, data, "level 0 is the host image");
+    staging.destroy(&ctx);
+    image.destroy(&ctx);
+    renderer.destroy(&ctx);
+}

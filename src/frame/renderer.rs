@@ -27,6 +27,9 @@ pub struct ShadingLayers {
     pub indirect_glossy: Vec<[f32; 3]>,
 }
 
+/// Stage name of [`Renderer::record_heights_from_image`].
+pub const STAGE_HEIGHTS_COPY: &str = "heights.copy";
+
 /// Counters that show what a frame did (for tests and the `animate` report).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RendererStats {
@@ -144,6 +147,52 @@ impl Renderer {
     /// [`Renderer::mark_heights_changed`].
     pub fn heights_buffer(&self) -> &Buffer {
         self.pyramid.levels_buffer()
+    }
+
+    /// Records a copy of the heights from a host's image (stage `heights.copy`) and marks them
+    /// changed. The image must be `R32_SFLOAT`, `W × H` (the renderer's size), created with
+    /// `TRANSFER_SRC` usage, and be in `layout` = `TRANSFER_SRC_OPTIMAL` or `GENERAL` with the
+    /// host's writes already made visible to the copy stage (the host's own barrier, ending in
+    /// `COPY` / `TRANSFER_READ`). The image stays in `layout`; the next [`Renderer::record`]
+    /// begins with the transfer→compute barrier for the copied heights.
+    pub fn record_heights_from_image(
+        &mut self,
+        rec: &mut Recorder,
+        image: ash::vk::Image,
+        format: ash::vk::Format,
+        extent: (u32, u32),
+        layout: ash::vk::ImageLayout,
+    ) -> Result<()> {
+        use ash::vk;
+        let l = self.pyramid.layout().levels[0];
+        if format != vk::Format::R32_SFLOAT {
+            return Err(Error::param("height image format", format!("{format:?}"), "R32_SFLOAT"));
+        }
+        if extent != (l.width, l.height) {
+            return Err(Error::param(
+                "height image size",
+                format!("{}×{}", extent.0, extent.1),
+                format!("{}×{} (the renderer's size)", l.width, l.height),
+            ));
+        }
+        if layout != vk::ImageLayout::TRANSFER_SRC_OPTIMAL && layout != vk::ImageLayout::GENERAL {
+            return Err(Error::param("height image layout", format!("{layout:?}"), "TRANSFER_SRC_OPTIMAL or GENERAL"));
+        }
+        let dst = self.pyramid.levels_buffer().raw;
+        rec.scope(STAGE_HEIGHTS_COPY, |ctx, cmd| {
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                })
+                .image_extent(vk::Extent3D { width: extent.0, height: extent.1, depth: 1 });
+            unsafe { ctx.device().cmd_copy_image_to_buffer(cmd, image, layout, dst, &[region]) };
+            crate::vk::barrier::transfer_to_compute(ctx, cmd);
+        });
+        self.heights_changed = true;
+        Ok(())
     }
 
     /// Tells the renderer that the heights were written on the GPU since the last frame.
