@@ -108,4 +108,20 @@ struct hfgi_WaterPush {
     vec4 drops[4];      // (x, y, amplitude, radius), texels
 };
 
+// Push constants of the ground-truth reference (glsl/reference/truth.comp.glsl). 48 bytes.
+struct hfgi_TruthPush {
+    uint width;
+    uint height;
+    uint wrap;
+    uint azimuths;      // A, uniformly spaced
+    float step;         // march step, texels
+    float texel_size;
+    uint sh_visibility; // 1: project to SH (V or U), 0: exact irradiance
+    uint indirect;      // 1: blocked directions with the source radiance, 0: open directions
+    uint row_offset;    // first row of this dispatch
+    uint rows;          // rows in this dispatch
+    uint azimuth_first; // azimuths [first, first + count) of `azimuths` in this dispatch
+    uint azimuth_count;
+};
+
 #endif

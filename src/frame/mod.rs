@@ -8,6 +8,7 @@ pub mod radiance;
 pub mod renderer;
 pub mod shade;
 pub mod shared;
+pub mod truth;
 pub mod view;
 pub mod visibility;
 pub mod water;

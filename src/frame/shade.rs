@@ -68,7 +68,7 @@ pub fn window_solid_angle(set: &AzimuthSet) -> f64 {
 }
 
 /// The constants block of the shader: K_l^m table, rotated-ZH band factors, triple count.
-fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
+pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
     let mut klm = [0f32; 64];
     for l in 0..n {
         for m in 0..=l {

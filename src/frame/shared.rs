@@ -134,6 +134,26 @@ pub struct WaterPush {
     pub drops: [[f32; 4]; 4],
 }
 
+/// `hfgi_TruthPush`: push constants of the ground-truth reference (`src/frame/truth.rs`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct TruthPush {
+    pub width: u32,
+    pub height: u32,
+    pub wrap: u32,
+    pub azimuths: u32,
+    pub step: f32,
+    pub texel_size: f32,
+    pub sh_visibility: u32,
+    pub indirect: u32,
+    pub row_offset: u32,
+    pub rows: u32,
+    /// This dispatch integrates azimuths `[azimuth_first, azimuth_first + azimuth_count)`.
+    pub azimuth_first: u32,
+    pub azimuth_count: u32,
+}
+
+const _: () = assert!(std::mem::size_of::<TruthPush>() == 48);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 16);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);

@@ -3,4 +3,5 @@
 pub mod direct;
 pub mod indirect;
 pub mod pyramid;
+pub mod truth;
 pub mod water;

@@ -1,0 +1,162 @@
+//! Stage `reference.truth`: the brute-force ground truth of CONVENTIONS.md on the GPU
+//! (`glsl/reference/truth.comp.glsl`; docs/accuracy.md §1). The shader integrates per texel
+//! (irradiance, or the SH projections `V`/`U`); the host finishes each texel in f64 with
+//! [`crate::reference::truth::finish_texel`], exactly as the CPU version
+//! ([`crate::reference::truth::render_truth`]) does, and feeds each bounce's exit radiance to
+//! the next. Work is split into bands of rows, one submission each, so that a long reference
+//! reports progress and never holds the queue for long.
+//!
+//! This is a measuring tool, not a frame pass: it owns its buffers and submits on its own
+//! (`Context::submit_and_wait`).
+
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+use super::shared::TruthPush;
+use crate::error::Result;
+use crate::math::quadrature::gauss_legendre;
+use crate::math::triple;
+use crate::reference::direct::normals;
+use crate::reference::truth::{albedo, finish_texel, lighting_sh, TruthOutput, TruthSettings};
+use crate::scene::model::Scene;
+use crate::shaders;
+use crate::vk::pipeline::{groups, Bind};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+
+pub const STAGE_TRUTH: &str = "reference.truth";
+
+/// Azimuths per dispatch. lavapipe silently ends an invocation's loops early once they have run
+/// too long (measured: a 16² flat field lost 45% of its light at 256 azimuths in one dispatch,
+/// none at 128), so the azimuth integral is accumulated over several dispatches.
+pub const AZIMUTH_CHUNK: u32 = 16;
+
+/// Renders the ground truth of `scene` on the GPU. `progress(done, total)` counts texel rows
+/// over all bounces.
+pub fn render_truth_gpu(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &TruthSettings,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<TruthOutput> {
+    settings.validate()?;
+    scene.gi.validate()?;
+    let n = scene.gi.sh_order;
+    let n2 = n * n;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let light = lighting_sh(scene);
+    let (gx, gw) = gauss_legendre(settings.nodes as usize);
+    let gauss: Vec<[f32; 2]> = gx.iter().zip(&gw).map(|(x, wt)| [*x as f32, *wt as f32]).collect();
+    let light32: Vec<[f32; 4]> = light.iter().map(|l| [l[0] as f32, l[1] as f32, l[2] as f32, 0.0]).collect();
+    let consts = super::shade::constants(n, 1.0, 0);
+    let usage =
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
+    let mut bufs: Vec<Buffer> = Vec::new();
+    let mut pipe: Option<ComputePipeline> = None;
+    let result = (|| -> Result<TruthOutput> {
+        for (name, bytes) in [
+            ("hfgi.truth.heights", (w * h * 4) as u64),
+            ("hfgi.truth.light", (n2 * 16) as u64),
+            ("hfgi.truth.source", (w * h * 16) as u64),
+            ("hfgi.truth.gauss", (gauss.len() * 8) as u64),
+            ("hfgi.truth.consts", (consts.len() * 4) as u64),
+            ("hfgi.truth.out", (w * h * n2 * 16) as u64),
+        ] {
+            bufs.push(Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)?);
+        }
+        memory::upload_f32(ctx, &bufs[0], 0, scene.field.data())?;
+        memory::upload(ctx, &bufs[1], 0, bytemuck::cast_slice(&light32))?;
+        memory::upload(ctx, &bufs[3], 0, bytemuck::cast_slice(&gauss))?;
+        memory::upload(ctx, &bufs[4], 0, bytemuck::cast_slice(&consts))?;
+        let p = pipe.insert(ComputePipeline::new(
+            ctx,
+            &shaders::REFERENCE_TRUTH_COMP,
+            &[DescriptorKind::StorageBuffer; 6],
+            std::mem::size_of::<TruthPush>() as u32,
+            &[(0, n as u32), (1, settings.nodes)],
+            1,
+        )?);
+        let binds: Vec<Bind> = bufs.iter().map(Bind::Buffer).collect();
+        let set = p.allocate_set(ctx, &binds)?;
+        let nrm = normals(scene);
+        let rho = albedo(scene);
+        let tri = triple::triple(n);
+        let rows_per_band = (16384 / w.max(1)).clamp(1, h) as u32;
+        let passes = scene.gi.bounces as u64 + 1;
+        let total = passes * h as u64;
+        let mut done = 0u64;
+        let mut run_pass = |indirect: bool, done: &mut u64| -> Result<Vec<[f64; 3]>> {
+            let mut row = 0u32;
+            while row < h as u32 {
+                let rows = rows_per_band.min(h as u32 - row);
+                ctx.submit_and_wait(|cmd| {
+                    let mut rec = Recorder::new(ctx, cmd, None);
+                    rec.scope(STAGE_TRUTH, |ctx, cmd| {
+                        barrier::transfer_to_compute(ctx, cmd);
+                        let mut first = 0;
+                        while first < settings.azimuths {
+                            let push = TruthPush {
+                                width: w as u32,
+                                height: h as u32,
+                                wrap: scene.wrap as u32,
+                                azimuths: settings.azimuths,
+                                step: settings.step as f32,
+                                texel_size: scene.texel_size as f32,
+                                sh_visibility: settings.sh_visibility as u32,
+                                indirect: indirect as u32,
+                                row_offset: row,
+                                rows,
+                                azimuth_first: first,
+                                azimuth_count: AZIMUTH_CHUNK.min(settings.azimuths - first),
+                            };
+                            let g = [groups(w as u32, 8), groups(rows, 8), 1];
+                            p.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), g);
+                            barrier::compute_to_compute(ctx, cmd);
+                            first += push.azimuth_count;
+                        }
+                    });
+                    Ok(())
+                })?;
+                row += rows;
+                *done += rows as u64;
+                progress(*done, total);
+            }
+            let raw = memory::download_f32(ctx, &bufs[5], 0, (w * h * n2 * 4) as u64)?;
+            Ok((0..w * h)
+                .map(|t| {
+                    let texel: Vec<[f64; 3]> = (0..n2)
+                        .map(|k| {
+                            let o = (t * n2 + k) * 4;
+                            [raw[o] as f64, raw[o + 1] as f64, raw[o + 2] as f64]
+                        })
+                        .collect();
+                    finish_texel(n, settings.sh_visibility, indirect, &light, &tri, &texel, nrm[t], rho[t])
+                })
+                .collect())
+        };
+        let direct = run_pass(false, &mut done)?;
+        let mut source = direct.clone();
+        let mut indirect_bounces = Vec::new();
+        for _ in 0..scene.gi.bounces {
+            let src: Vec<[f32; 4]> = source.iter().map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0]).collect();
+            memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&src))?;
+            let b = run_pass(true, &mut done)?;
+            source = b.clone();
+            indirect_bounces.push(b);
+        }
+        let mut indirect = vec![[0.0; 3]; w * h];
+        for b in &indirect_bounces {
+            for (o, v) in indirect.iter_mut().zip(b) {
+                for c in 0..3 {
+                    o[c] += v[c];
+                }
+            }
+        }
+        let total = direct.iter().zip(&indirect).map(|(d, i)| [d[0] + i[0], d[1] + i[1], d[2] + i[2]]).collect();
+        Ok(TruthOutput { width: w, height: h, direct, indirect_bounces, indirect, total })
+    })();
+    if let Some(mut p) = pipe {
+        p.destroy(ctx);
+    }
+    bufs.into_iter().for_each(|b| b.destroy(ctx));
+    result
+}
