@@ -80,8 +80,8 @@ pub fn lighting_sh(scene: &Scene) -> Vec<[f64; 3]> {
     for key in &scene.key_lights {
         let cap = zh::rotate(n, &zh::cap(n, key.angular_radius), key.direction.normalize().to_array());
         for (o, c) in l.iter_mut().zip(&cap) {
-            for ch in 0..3 {
-                o[ch] += c * key.radiance[ch];
+            for (oc, r) in o.iter_mut().zip(&key.radiance) {
+                *oc += c * r;
             }
         }
     }
@@ -133,6 +133,7 @@ pub fn tangent_elevation(n: [f64; 3], phi: f64) -> f64 {
 /// Exit radiance of one texel from the reference's raw integral (docs/accuracy.md §1): exact
 /// mode `raw[0]` = `E` (rgb) → `ρ/π E`; SH mode, direct: `raw[k][0]` = `V_k` → `ρ/π ⟨L ⊛ V,
 /// cc_N⟩`; SH mode, indirect: `raw[k]` = `U_k` (rgb) → `ρ/π ⟨U, cc_N⟩`.
+#[allow(clippy::too_many_arguments)]
 pub fn finish_texel(
     n: usize,
     sh_visibility: bool,
