@@ -21,7 +21,7 @@ use crate::reference::truth::{albedo, finish_texel, lighting_sh, TruthOutput, Tr
 use crate::scene::model::Scene;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
-use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder, StageTimer};
 
 pub const STAGE_TRUTH: &str = "reference.truth";
 
@@ -38,6 +38,17 @@ pub fn render_truth_gpu(
     settings: &TruthSettings,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<TruthOutput> {
+    render_truth_gpu_timed(ctx, scene, settings, progress).map(|(o, _)| o)
+}
+
+/// [`render_truth_gpu`] plus the GPU time of all its dispatches in milliseconds (the sum of
+/// the `reference.truth` timestamp scopes; `None` where the queue has no timestamps).
+pub fn render_truth_gpu_timed(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &TruthSettings,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(TruthOutput, Option<f64>)> {
     settings.validate()?;
     scene.gi.validate()?;
     let n = scene.gi.sh_order;
@@ -52,6 +63,8 @@ pub fn render_truth_gpu(
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
     let mut bufs: Vec<Buffer> = Vec::new();
     let mut pipe: Option<ComputePipeline> = None;
+    let mut timer = StageTimer::new(ctx, 1)?;
+    let mut gpu_ms = Some(0.0);
     let result = (|| -> Result<TruthOutput> {
         for (name, bytes) in [
             ("hfgi.truth.heights", (w * h * 4) as u64),
@@ -89,7 +102,7 @@ pub fn render_truth_gpu(
             while row < h as u32 {
                 let rows = rows_per_band.min(h as u32 - row);
                 ctx.submit_and_wait(|cmd| {
-                    let mut rec = Recorder::new(ctx, cmd, None);
+                    let mut rec = Recorder::new(ctx, cmd, Some(&mut timer));
                     rec.scope(STAGE_TRUTH, |ctx, cmd| {
                         barrier::transfer_to_compute(ctx, cmd);
                         let mut first = 0;
@@ -116,6 +129,10 @@ pub fn render_truth_gpu(
                     });
                     Ok(())
                 })?;
+                gpu_ms = match (gpu_ms, timer.timings(ctx)) {
+                    (Some(acc), Ok(t)) => Some(acc + t.iter().map(|(_, ms)| ms).sum::<f64>()),
+                    _ => None,
+                };
                 row += rows;
                 *done += rows as u64;
                 progress(*done, total);
@@ -157,6 +174,7 @@ pub fn render_truth_gpu(
     if let Some(mut p) = pipe {
         p.destroy(ctx);
     }
+    timer.destroy(ctx);
     bufs.into_iter().for_each(|b| b.destroy(ctx));
-    result
+    result.map(|o| (o, gpu_ms))
 }

@@ -1,5 +1,7 @@
 //! `hfgi` — command-line front end of the hfgi library.
 
+mod reference;
+
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
@@ -45,6 +47,15 @@ enum Command {
     /// animated GIF. Prints the renderer's counters, the pipelines created before and after the
     /// loop, and the median per-stage time. See docs/dynamic.md.
     Animate(AnimateArgs),
+    /// Compute the brute-force ground truth of a scene (docs/accuracy.md §1).
+    ///
+    /// Ray-marches the full-resolution bilinear surface (no pyramid, no sub-sampling) over
+    /// --azimuths directions at --step texels, integrates elevations with Gauss–Legendre, and
+    /// writes the shading texture in the layers `render` writes (direct, indirect = 1..bounces
+    /// diffuse bounces, glossy = 0, total). The exact reference by default; --sh-visibility
+    /// projects the exact visibility and indirect radiance to order-n SH first. On the GPU
+    /// (compute) with a progress bar; --cpu runs the f64 CPU version (fields up to 64²).
+    Reference(reference::ReferenceArgs),
     /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
     Pyramid(PyramidArgs),
     /// List the Vulkan devices and which one hfgi would choose.
@@ -58,7 +69,7 @@ enum Command {
 }
 
 #[derive(Args)]
-struct DeviceArgs {
+pub(crate) struct DeviceArgs {
     /// Vulkan device name substring (overrides HFGI_DEVICE).
     #[arg(long)]
     device: Option<String>,
@@ -171,7 +182,7 @@ fn parse_size(s: &str, what: &str) -> Result<(usize, usize)> {
     }
 }
 
-fn context(d: &DeviceArgs) -> Result<Context> {
+pub(crate) fn context(d: &DeviceArgs) -> Result<Context> {
     let opts = ContextOptions { validation: d.validation.then_some(true), device_filter: d.device.clone() };
     Context::headless_with(&opts).context("creating the Vulkan context")
 }
@@ -189,17 +200,19 @@ fn print_timings(ctx: &Context, timer: &StageTimer) {
     }
 }
 
-fn render(a: RenderArgs) -> Result<()> {
-    let scene = match &a.scene {
+/// The scene file at `path` (or the default scene) with `--set` overrides applied.
+pub(crate) fn load_scene_or_default(path: Option<&Path>, overrides: &[String]) -> Result<hfgi::scene::model::Scene> {
+    match path {
         Some(p) => {
-            hfgi::scene::file::load_scene(p, &a.overrides).with_context(|| format!("loading scene {}", p.display()))?
+            hfgi::scene::file::load_scene(p, overrides).with_context(|| format!("loading scene {}", p.display()))
         }
-        None => {
-            let empty = std::path::Path::new(".");
-            hfgi::scene::file::parse_scene("", empty, "default scene", &a.overrides)
-                .context("building the default scene")?
-        }
-    };
+        None => hfgi::scene::file::parse_scene("", Path::new("."), "default scene", overrides)
+            .context("building the default scene"),
+    }
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
     let ctx = context(&a.device)?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let max = ctx.info().max_image_dimension_2d as usize;
@@ -637,6 +650,7 @@ fn main() -> Result<()> {
     match cli.command {
         Command::Render(a) => render(a),
         Command::Animate(a) => animate(a),
+        Command::Reference(a) => reference::reference(a),
         Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),
         Command::Spirv { out } => spirv(&out),
