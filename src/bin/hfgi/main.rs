@@ -45,6 +45,15 @@ enum Command {
     /// animated GIF. Prints the renderer's counters, the pipelines created before and after the
     /// loop, and the median per-stage time. See docs/dynamic.md.
     Animate(AnimateArgs),
+    /// Print the passes and the stages a frame records, with the reason for each (no GPU).
+    ///
+    /// Plans the scene as `Renderer::new` and `Renderer::record` do (docs/plan.md) without
+    /// creating a Vulkan context: first the passes created (and the ones left out, with why),
+    /// then for each frame the ordered stage list with the reason for each stage and the stages
+    /// left out. Frame 0 has new heights; with --frames N the later frames are static (so
+    /// `gi.amortize` alternates direct and indirect shading), or have new heights every frame
+    /// when the scene has an [animation].
+    Plan(PlanArgs),
     /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
     Pyramid(PyramidArgs),
     /// List the Vulkan devices and which one hfgi would choose.
@@ -98,6 +107,18 @@ struct RenderArgs {
     exposure: Option<f32>,
     #[command(flatten)]
     device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct PlanArgs {
+    /// Scene file (TOML, docs/scene-format.md). Without it, the default scene.
+    scene: Option<PathBuf>,
+    /// Override a scene setting, e.g. `--set gi.bounces=2 --set gi.amortize=false`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Number of frames to plan (≥ 1): frame 0 with new heights, then static frames.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
 }
 
 #[derive(Args)]
@@ -189,17 +210,19 @@ fn print_timings(ctx: &Context, timer: &StageTimer) {
     }
 }
 
-fn render(a: RenderArgs) -> Result<()> {
-    let scene = match &a.scene {
+/// The scene file at `path` with `overrides`, or the default scene.
+fn load_scene(path: Option<&Path>, overrides: &[String]) -> Result<hfgi::scene::model::Scene> {
+    match path {
         Some(p) => {
-            hfgi::scene::file::load_scene(p, &a.overrides).with_context(|| format!("loading scene {}", p.display()))?
+            hfgi::scene::file::load_scene(p, overrides).with_context(|| format!("loading scene {}", p.display()))
         }
-        None => {
-            let empty = std::path::Path::new(".");
-            hfgi::scene::file::parse_scene("", empty, "default scene", &a.overrides)
-                .context("building the default scene")?
-        }
-    };
+        None => hfgi::scene::file::parse_scene("", Path::new("."), "default scene", overrides)
+            .context("building the default scene"),
+    }
+}
+
+fn render(a: RenderArgs) -> Result<()> {
+    let scene = load_scene(a.scene.as_deref(), &a.overrides)?;
     let ctx = context(&a.device)?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let max = ctx.info().max_image_dimension_2d as usize;
@@ -287,6 +310,32 @@ fn render(a: RenderArgs) -> Result<()> {
             ],
         )?;
         eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn plan(a: PlanArgs) -> Result<()> {
+    if a.frames == 0 {
+        bail!("--frames 0: expected at least 1 frame");
+    }
+    let scene = load_scene(a.scene.as_deref(), &a.overrides)?;
+    scene.gi.validate().context("checking the [gi] settings")?;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let name = a.scene.as_ref().map_or("default scene".to_string(), |p| p.display().to_string());
+    let animated = scene.animation != Animation::None;
+    let motion = if animated {
+        format!(", animation {} (new heights every frame)", scene.animation.kind())
+    } else {
+        String::new()
+    };
+    println!("scene {name}: {w}×{h}, gi.bounces = {}, gi.amortize = {}{motion}", scene.gi.bounces, scene.gi.amortize);
+    let planner = hfgi::frame::Planner::new(&scene);
+    for f in 0..u64::from(a.frames) {
+        let p = planner.plan(&hfgi::frame::FrameState { heights_changed: f == 0 || animated, frame_index: f });
+        if f == 0 {
+            print!("{}", p.passes_text());
+        }
+        print!("{p}");
     }
     Ok(())
 }
@@ -637,6 +686,7 @@ fn main() -> Result<()> {
     match cli.command {
         Command::Render(a) => render(a),
         Command::Animate(a) => animate(a),
+        Command::Plan(a) => plan(a),
         Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),
         Command::Spirv { out } => spirv(&out),
