@@ -11,7 +11,7 @@ fn hfgi(args: &[&str]) -> (bool, String) {
 fn help_documents_every_command_and_option() {
     let (ok, top) = hfgi(&["--help"]);
     assert!(ok, "{top}");
-    for cmd in ["render", "pyramid", "devices", "spirv", "HFGI_DEVICE", "HFGI_VALIDATION"] {
+    for cmd in ["render", "plan", "pyramid", "devices", "spirv", "HFGI_DEVICE", "HFGI_VALIDATION"] {
         assert!(top.contains(cmd), "`hfgi --help` does not mention {cmd}:\n{top}");
     }
     let (ok, render) = hfgi(&["render", "--help"]);
@@ -46,6 +46,11 @@ fn help_documents_every_command_and_option() {
         "--validation",
     ] {
         assert!(pyramid.contains(opt), "`hfgi pyramid --help` does not document {opt}:\n{pyramid}");
+    }
+    let (ok, plan) = hfgi(&["plan", "--help"]);
+    assert!(ok, "{plan}");
+    for opt in ["[SCENE]", "--set", "--frames", "no GPU", "docs/plan.md"] {
+        assert!(plan.contains(opt), "`hfgi plan --help` does not document {opt}:\n{plan}");
     }
     let (ok, spirv) = hfgi(&["spirv", "--help"]);
     assert!(ok && spirv.contains("--out"), "{spirv}");

@@ -200,18 +200,29 @@ impl IndirectPass {
     pub fn record(&self, rec: &mut Recorder, bounces: u32) {
         for b in 1..=bounces {
             self.radiance.record(rec, b);
-            rec.scope(STAGE_SCAN, |ctx, cmd| {
-                let g = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
-                self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&self.push), g);
-                barrier::compute_to_compute(ctx, cmd);
-            });
-            rec.scope(STAGE_SHADE, |ctx, cmd| {
-                let push = ShadePush { accumulate: (b > 1) as u32, ..self.shade_push };
-                let g = [groups(push.width, 8), groups(push.height, 8), 1];
-                self.shade.dispatch(ctx, cmd, self.shade_set, bytemuck::bytes_of(&push), g);
-                barrier::compute_to_compute(ctx, cmd);
-            });
+            self.record_scan(rec);
+            self.record_shade(rec, b);
         }
+    }
+
+    /// Records the scan of the radiance pyramid (stage `indirect.scan`).
+    pub fn record_scan(&self, rec: &mut Recorder) {
+        rec.scope(STAGE_SCAN, |ctx, cmd| {
+            let g = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
+            self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&self.push), g);
+            barrier::compute_to_compute(ctx, cmd);
+        });
+    }
+
+    /// Records the shading of bounce `bounce` (1-based; stage `indirect.shade`): bounce 1
+    /// writes the indirect planes, later bounces add to them.
+    pub fn record_shade(&self, rec: &mut Recorder, bounce: u32) {
+        rec.scope(STAGE_SHADE, |ctx, cmd| {
+            let push = ShadePush { accumulate: (bounce > 1) as u32, ..self.shade_push };
+            let g = [groups(push.width, 8), groups(push.height, 8), 1];
+            self.shade.dispatch(ctx, cmd, self.shade_set, bytemuck::bytes_of(&push), g);
+            barrier::compute_to_compute(ctx, cmd);
+        });
     }
 
     /// The IR vectors of the last bounce: receivers × `n²` × `vec4` (rgb, 0).

@@ -3,6 +3,7 @@
 //! [`crate::reference`].
 
 pub mod indirect;
+pub mod plan;
 pub mod pyramid;
 pub mod radiance;
 pub mod renderer;
@@ -13,4 +14,5 @@ pub mod view;
 pub mod visibility;
 pub mod water;
 
+pub use plan::{FrameState, Plan, PlannedPass, PlannedStage, Planner, Stage};
 pub use renderer::{Renderer, RendererStats, ShadingLayers};

@@ -288,6 +288,12 @@ impl HeightPyramid {
 
     /// Records the decimation (and, in stack mode, the synthesis) into `rec`'s command buffer.
     pub fn record(&self, rec: &mut Recorder) {
+        self.record_decimate(rec);
+        self.record_synthesize(rec);
+    }
+
+    /// Records the decimation alone (stage `*.decimate`).
+    pub fn record_decimate(&self, rec: &mut Recorder) {
         let wrap = self.wrap as u32;
         let layout = &self.layout;
         let (n, channels) = (layout.count() as u32, self.kind.channels.max(1));
@@ -308,6 +314,13 @@ impl HeightPyramid {
                 barrier::compute_to_compute(ctx, cmd);
             }
         });
+    }
+
+    /// Records the synthesis of the stack (stage `*.synthesize`); nothing in pyramid mode.
+    pub fn record_synthesize(&self, rec: &mut Recorder) {
+        let wrap = self.wrap as u32;
+        let n = self.layout.count() as u32;
+        let channels = self.kind.channels.max(1);
         if let Some(p) = &self.synthesize {
             rec.scope(self.kind.stage_synthesize, |ctx, cmd| {
                 let (ww, wh) = self.work;

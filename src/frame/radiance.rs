@@ -118,13 +118,18 @@ impl RadiancePyramid {
 
     /// Records gather + decimate (+ synthesize) for bounce `bounce` (1-based).
     pub fn record(&self, rec: &mut Recorder, bounce: u32) {
+        self.record_gather(rec, bounce);
+        self.pyramid.record(rec);
+    }
+
+    /// Records the gather of bounce `bounce`'s input (stage `radiance.gather`).
+    pub fn record_gather(&self, rec: &mut Recorder, bounce: u32) {
         rec.scope(STAGE_GATHER, |ctx, cmd| {
             let push = GatherPush { from_bounce: (bounce > 1) as u32, ..self.push };
             let g = [groups(push.width, 8), groups(push.height, 8), 1];
             self.gather.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);
             barrier::compute_to_compute(ctx, cmd);
         });
-        self.pyramid.record(rec);
     }
 
     pub fn memory_bytes(&self) -> u64 {

@@ -7,6 +7,7 @@
 //! [`ShadePass`] (see its docs for the layout). Intermediates are private.
 
 use super::indirect::IndirectPass;
+use super::plan::{FrameState, Plan, Planner, Stage};
 use super::pyramid::HeightPyramid;
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
@@ -46,8 +47,7 @@ pub struct Renderer {
     pub shade: ShadePass,
     /// Present when the scene needs indirect light (bounces > 0 and some exit radiance).
     pub indirect: Option<IndirectPass>,
-    bounces: u32,
-    amortize: bool,
+    planner: Planner,
     heights_changed: bool,
     stats: RendererStats,
 }
@@ -75,7 +75,8 @@ impl Renderer {
                 return Err(e);
             }
         };
-        let indirect = if needs_indirect(scene) {
+        let planner = Planner::new(scene);
+        let indirect = if planner.creates_indirect() {
             match IndirectPass::new(ctx, &pyramid, &shade, scene) {
                 Ok(i) => Some(i),
                 Err(e) => {
@@ -93,34 +94,52 @@ impl Renderer {
             visibility,
             shade,
             indirect,
-            bounces: scene.gi.bounces,
-            amortize: scene.gi.amortize,
+            planner,
             heights_changed: true,
             stats: RendererStats::default(),
         })
     }
 
-    /// Records the frame: the pyramid and the visibility only when the heights changed since
-    /// the last recorded frame; then the direct shading and the indirect bounces. With
+    /// Records the frame: exactly the stages of [`Renderer::plan_next`], in its order
+    /// (docs/plan.md): the pyramid and the visibility only when the heights changed since the
+    /// last recorded frame; then the direct shading and the indirect bounces. With
     /// `gi.amortize` and unchanged heights, even frames shade the direct light and odd frames
     /// the indirect light (§7); when the heights changed, both.
     pub fn record(&mut self, rec: &mut Recorder) {
-        let frame = self.stats.frames;
+        let plan = self.plan_next();
+        let first = rec.stages().len();
+        for s in &plan.stages {
+            self.record_stage(rec, s.stage);
+        }
+        debug_assert!(
+            rec.stages()[first..].iter().map(String::as_str).eq(plan.names()),
+            "recorded stages {:?} differ from the plan {:?}",
+            &rec.stages()[first..],
+            plan.names()
+        );
         self.stats.frames += 1;
-        let changed = self.heights_changed;
-        if changed {
-            self.pyramid.record(rec);
-            self.stats.pyramid_builds += 1;
-            self.heights_changed = false;
-            self.visibility.record(rec);
-        }
-        let (direct, indirect) =
-            if changed || !self.amortize { (true, true) } else { (frame % 2 == 0, frame % 2 == 1) };
-        if direct {
-            self.shade.record(rec);
-        }
-        if let (true, Some(ind)) = (indirect, &self.indirect) {
-            ind.record(rec, self.bounces);
+        self.stats.pyramid_builds += plan.rebuilds_pyramid() as u64;
+        self.heights_changed = false;
+    }
+
+    /// The plan of the frame the next [`Renderer::record`] records (docs/plan.md).
+    pub fn plan_next(&self) -> Plan {
+        self.planner.plan(&FrameState { heights_changed: self.heights_changed, frame_index: self.stats.frames })
+    }
+
+    fn record_stage(&self, rec: &mut Recorder, stage: Stage) {
+        let ind = self.indirect.as_ref();
+        match stage {
+            Stage::PyramidDecimate => self.pyramid.record_decimate(rec),
+            Stage::PyramidSynthesize => self.pyramid.record_synthesize(rec),
+            Stage::VisibilityEnvironment => self.visibility.record_sets(rec, true),
+            Stage::VisibilityKeyLights => self.visibility.record_sets(rec, false),
+            Stage::ShadeDirect => self.shade.record(rec),
+            Stage::RadianceGather(b) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec, b)),
+            Stage::RadianceDecimate(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_decimate(rec)),
+            Stage::RadianceSynthesize(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_synthesize(rec)),
+            Stage::IndirectScan(_) => ind.into_iter().for_each(|i| i.record_scan(rec)),
+            Stage::IndirectShade(b) => ind.into_iter().for_each(|i| i.record_shade(rec, b)),
         }
     }
 

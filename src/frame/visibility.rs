@@ -28,11 +28,16 @@ pub enum SetKind {
     KeyLight(usize),
 }
 
+/// Whether the scene has an environment light (some SH coefficient is non-zero).
+pub fn has_environment(scene: &Scene) -> bool {
+    scene.environment.sh.iter().any(|c| c.iter().any(|v| *v != 0.0))
+}
+
 /// The light sets of a scene with their azimuth samples (docs/direct.md §4).
 pub fn light_sets(scene: &Scene) -> Vec<(SetKind, AzimuthSet)> {
     let gi = &scene.gi;
     let mut sets = Vec::new();
-    if scene.environment.sh.iter().any(|c| c.iter().any(|v| *v != 0.0)) {
+    if has_environment(scene) {
         sets.push((SetKind::Environment, azimuth::environment_set(gi.azimuths as usize, gi.interpolation)));
     }
     for (i, l) in scene.key_lights.iter().enumerate() {
@@ -164,28 +169,34 @@ impl VisibilityPass {
 
     /// Records one dispatch per light set, inside the stage scopes.
     pub fn record(&self, rec: &mut Recorder) {
+        self.record_sets(rec, true);
+        self.record_sets(rec, false);
+    }
+
+    /// Records the environment set (stage `visibility.environment`) or the key-light sets
+    /// (stage `visibility.key_lights`); nothing when there are no such sets.
+    pub fn record_sets(&self, rec: &mut Recorder, environment: bool) {
         let receivers = self.push.work_width * self.push.work_height;
         let n2 = (self.n * self.n) as u32;
         let groups = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
-        for (stage, env) in [(STAGE_ENVIRONMENT, true), (STAGE_KEY_LIGHTS, false)] {
-            let chosen: Vec<(usize, &SetRange)> =
-                self.sets.iter().enumerate().filter(|(_, s)| (s.kind == SetKind::Environment) == env).collect();
-            if chosen.is_empty() {
-                continue;
-            }
-            rec.scope(stage, |ctx, cmd| {
-                for (i, s) in &chosen {
-                    let push = VisibilityPush {
-                        sample_offset: s.first,
-                        sample_count: s.count,
-                        out_offset: *i as u32 * receivers * n2,
-                        ..self.push
-                    };
-                    self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
-                }
-                barrier::compute_to_compute(ctx, cmd);
-            });
+        let stage = if environment { STAGE_ENVIRONMENT } else { STAGE_KEY_LIGHTS };
+        let chosen: Vec<(usize, &SetRange)> =
+            self.sets.iter().enumerate().filter(|(_, s)| (s.kind == SetKind::Environment) == environment).collect();
+        if chosen.is_empty() {
+            return;
         }
+        rec.scope(stage, |ctx, cmd| {
+            for (i, s) in &chosen {
+                let push = VisibilityPush {
+                    sample_offset: s.first,
+                    sample_count: s.count,
+                    out_offset: *i as u32 * receivers * n2,
+                    ..self.push
+                };
+                self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
+            }
+            barrier::compute_to_compute(ctx, cmd);
+        });
     }
 
     /// Number of light sets (the first dimension of [`VisibilityPass::buffer`]).

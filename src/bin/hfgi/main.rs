@@ -56,6 +56,15 @@ enum Command {
     /// projects the exact visibility and indirect radiance to order-n SH first. On the GPU
     /// (compute) with a progress bar; --cpu runs the f64 CPU version (fields up to 64²).
     Reference(reference::ReferenceArgs),
+    /// Print the passes and the stages a frame records, with the reason for each (no GPU).
+    ///
+    /// Plans the scene as `Renderer::new` and `Renderer::record` do (docs/plan.md) without
+    /// creating a Vulkan context: first the passes created (and the ones left out, with why),
+    /// then for each frame the ordered stage list with the reason for each stage and the stages
+    /// left out. Frame 0 has new heights; with --frames N the later frames are static (so
+    /// `gi.amortize` alternates direct and indirect shading), or have new heights every frame
+    /// when the scene has an [animation].
+    Plan(PlanArgs),
     /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
     Pyramid(PyramidArgs),
     /// List the Vulkan devices and which one hfgi would choose.
@@ -109,6 +118,18 @@ struct RenderArgs {
     exposure: Option<f32>,
     #[command(flatten)]
     device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct PlanArgs {
+    /// Scene file (TOML, docs/scene-format.md). Without it, the default scene.
+    scene: Option<PathBuf>,
+    /// Override a scene setting, e.g. `--set gi.bounces=2 --set gi.amortize=false`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Number of frames to plan (≥ 1): frame 0 with new heights, then static frames.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
 }
 
 #[derive(Args)]
@@ -300,6 +321,32 @@ fn render(a: RenderArgs) -> Result<()> {
             ],
         )?;
         eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn plan(a: PlanArgs) -> Result<()> {
+    if a.frames == 0 {
+        bail!("--frames 0: expected at least 1 frame");
+    }
+    let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
+    scene.gi.validate().context("checking the [gi] settings")?;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let name = a.scene.as_ref().map_or("default scene".to_string(), |p| p.display().to_string());
+    let animated = scene.animation != Animation::None;
+    let motion = if animated {
+        format!(", animation {} (new heights every frame)", scene.animation.kind())
+    } else {
+        String::new()
+    };
+    println!("scene {name}: {w}×{h}, gi.bounces = {}, gi.amortize = {}{motion}", scene.gi.bounces, scene.gi.amortize);
+    let planner = hfgi::frame::Planner::new(&scene);
+    for f in 0..u64::from(a.frames) {
+        let p = planner.plan(&hfgi::frame::FrameState { heights_changed: f == 0 || animated, frame_index: f });
+        if f == 0 {
+            print!("{}", p.passes_text());
+        }
+        print!("{p}");
     }
     Ok(())
 }
@@ -651,6 +698,7 @@ fn main() -> Result<()> {
         Command::Render(a) => render(a),
         Command::Animate(a) => animate(a),
         Command::Reference(a) => reference::reference(a),
+        Command::Plan(a) => plan(a),
         Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),
         Command::Spirv { out } => spirv(&out),

@@ -1,0 +1,476 @@
+//! The frame plan: which passes a scene needs and which stages a frame records, each with the
+//! reason it is there (docs/plan.md). Pure: no Vulkan, so `hfgi plan` runs without a device.
+//!
+//! [`crate::frame::Renderer::new`] creates the passes [`Plan::passes`] lists as created, and
+//! [`crate::frame::Renderer::record`] computes the plan of the frame and records exactly its
+//! [`Plan::stages`], in order; [`crate::frame::Renderer::plan_next`] returns that plan before
+//! recording. The rules (docs/plan.md §1):
+//!
+//! - heights changed since the last frame (always on the first): `pyramid.decimate`, in stack
+//!   mode `pyramid.synthesize`, then the visibility; unchanged heights keep all of them;
+//! - `visibility.environment` only with a non-zero environment (some SH coefficient ≠ 0),
+//!   `visibility.key_lights` only with key lights;
+//! - `shade.direct`, then per bounce `b = 1..B`: `radiance.gather`, `radiance.decimate`,
+//!   `radiance.synthesize` (stack mode and scalar radiance pyramid only), `indirect.scan`,
+//!   `indirect.shade` — the indirect stages only with `gi.bounces > 0` and a surface that
+//!   reflects light (albedo or specular non-zero);
+//! - amortisation (docs/indirect.md §5): with `gi.amortize` and unchanged heights, even frames
+//!   record only `shade.direct`, odd frames only the indirect stages.
+
+use std::fmt;
+
+use super::indirect::{STAGE_SCAN, STAGE_SHADE};
+use super::pyramid::{PyramidLayout, STAGE_DECIMATE, STAGE_SYNTHESIZE};
+use super::radiance::{STAGE_DECIMATE as RAD_DECIMATE, STAGE_GATHER, STAGE_SYNTHESIZE as RAD_SYNTHESIZE};
+use super::renderer::{needs_indirect, vector_pyramid};
+use super::shade::STAGE_DIRECT;
+use super::visibility::{has_environment, STAGE_ENVIRONMENT, STAGE_KEY_LIGHTS};
+use crate::scene::model::{Albedo, GlossyPyramid, PyramidMode, Scene};
+
+/// One stage of a frame; the indirect stages carry their bounce (1-based).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    PyramidDecimate,
+    PyramidSynthesize,
+    VisibilityEnvironment,
+    VisibilityKeyLights,
+    ShadeDirect,
+    RadianceGather(u32),
+    RadianceDecimate(u32),
+    RadianceSynthesize(u32),
+    IndirectScan(u32),
+    IndirectShade(u32),
+}
+
+impl Stage {
+    /// The scope name the stage records (timestamps, debug labels, `Recorder::stages`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::PyramidDecimate => STAGE_DECIMATE,
+            Stage::PyramidSynthesize => STAGE_SYNTHESIZE,
+            Stage::VisibilityEnvironment => STAGE_ENVIRONMENT,
+            Stage::VisibilityKeyLights => STAGE_KEY_LIGHTS,
+            Stage::ShadeDirect => STAGE_DIRECT,
+            Stage::RadianceGather(_) => STAGE_GATHER,
+            Stage::RadianceDecimate(_) => RAD_DECIMATE,
+            Stage::RadianceSynthesize(_) => RAD_SYNTHESIZE,
+            Stage::IndirectScan(_) => STAGE_SCAN,
+            Stage::IndirectShade(_) => STAGE_SHADE,
+        }
+    }
+}
+
+/// What the planner needs to know about the frame about to be recorded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameState {
+    /// The heights changed since the last recorded frame (true for the first frame).
+    pub heights_changed: bool,
+    /// Frames recorded before this one (0 for the first).
+    pub frame_index: u64,
+}
+
+impl FrameState {
+    /// The first frame of a renderer: heights just uploaded.
+    pub fn first() -> Self {
+        Self { heights_changed: true, frame_index: 0 }
+    }
+
+    /// Frame `frame_index` of a static scene (the first frame has new heights).
+    pub fn static_scene(frame_index: u64) -> Self {
+        Self { heights_changed: frame_index == 0, frame_index }
+    }
+}
+
+/// A stage the frame records, or one it leaves out, with the reason.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PlannedStage {
+    pub stage: Stage,
+    pub name: &'static str,
+    pub reason: String,
+}
+
+/// A pass of [`crate::frame::Renderer`]: whether `Renderer::new` creates it, and why.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PlannedPass {
+    pub name: &'static str,
+    pub created: bool,
+    pub reason: String,
+}
+
+/// The plan of one frame.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Plan {
+    pub frame: FrameState,
+    /// The stages the frame records, in order.
+    pub stages: Vec<PlannedStage>,
+    /// Stages the frame leaves out, with the reason (the bounce of an indirect stage is 0).
+    pub omitted: Vec<PlannedStage>,
+    passes: Vec<PlannedPass>,
+}
+
+impl Plan {
+    /// The recorded stage names, in order (what `Recorder::stages` returns for the frame).
+    pub fn names(&self) -> Vec<&'static str> {
+        self.stages.iter().map(|s| s.name).collect()
+    }
+
+    /// The passes of the scene (frame-independent): which ones `Renderer::new` creates, and why.
+    pub fn passes(&self) -> &[PlannedPass] {
+        &self.passes
+    }
+
+    /// Whether the frame rebuilds the height pyramid.
+    pub fn rebuilds_pyramid(&self) -> bool {
+        self.stages.iter().any(|s| s.stage == Stage::PyramidDecimate)
+    }
+
+    /// The passes as text, one per line (the first part of `hfgi plan`).
+    pub fn passes_text(&self) -> String {
+        let mut s = String::from("passes (Renderer::new):\n");
+        for p in &self.passes {
+            let mark = if p.created { "created" } else { "not created" };
+            s += &format!("  {:<16} {:<12} {}\n", p.name, mark, p.reason);
+        }
+        s
+    }
+}
+
+impl fmt::Display for Plan {
+    /// The frame's stages with their reasons, then the stages it leaves out.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let state = if self.frame.heights_changed { "heights changed" } else { "heights unchanged" };
+        let n = self.stages.len();
+        writeln!(f, "frame {} ({state}): {n} stage{}", self.frame.frame_index, plural(n))?;
+        for (i, s) in self.stages.iter().enumerate() {
+            writeln!(f, "  {:>2}. {:<24} {}", i + 1, s.name, s.reason)?;
+        }
+        for s in &self.omitted {
+            writeln!(f, "   -  {:<24} not recorded: {}", s.name, s.reason)?;
+        }
+        Ok(())
+    }
+}
+
+/// What the plan depends on, taken from the scene once ([`crate::frame::Renderer`] keeps it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Planner {
+    size: (usize, usize),
+    work: (usize, usize),
+    mode: PyramidMode,
+    level_step: u32,
+    levels: usize,
+    radiance_level_step: u32,
+    radiance_levels: usize,
+    environment: bool,
+    azimuths: u32,
+    key_lights: usize,
+    key_light_azimuths: u32,
+    bounces: u32,
+    albedo: bool,
+    specular: bool,
+    indirect: bool,
+    glossy_pyramid: GlossyPyramid,
+    vector: bool,
+    channels: u32,
+    amortize: bool,
+}
+
+/// The plan of `frame` for `scene` (`Planner::new(scene).plan(frame)`).
+pub fn plan(scene: &Scene, frame: &FrameState) -> Plan {
+    Planner::new(scene).plan(frame)
+}
+
+impl Planner {
+    pub fn new(scene: &Scene) -> Self {
+        let gi = &scene.gi;
+        let size = (scene.field.width(), scene.field.height());
+        let count = |k| PyramidLayout::new(size.0, size.1, k).map_or(0, |l| l.count());
+        let m = &scene.material;
+        let albedo = match &m.albedo {
+            Albedo::Constant(a) => a.iter().any(|v| *v != 0.0),
+            Albedo::Map(map) => map.iter().any(|a| a.iter().any(|v| *v != 0.0)),
+        };
+        let n2 = (gi.sh_order * gi.sh_order) as u32;
+        let vector = vector_pyramid(scene);
+        Self {
+            size,
+            work: gi.working_size(size.0, size.1),
+            mode: gi.pyramid,
+            level_step: gi.level_step,
+            levels: count(gi.level_step),
+            radiance_level_step: gi.radiance_level_step,
+            radiance_levels: count(gi.radiance_level_step),
+            environment: has_environment(scene),
+            azimuths: gi.azimuths,
+            key_lights: scene.key_lights.len(),
+            key_light_azimuths: gi.key_light_azimuths,
+            bounces: gi.bounces,
+            albedo,
+            specular: m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0)),
+            indirect: needs_indirect(scene),
+            glossy_pyramid: gi.glossy_pyramid,
+            vector,
+            channels: if vector { 3 + 3 * n2 } else { 3 },
+            amortize: gi.amortize,
+        }
+    }
+
+    /// Whether `Renderer::new` creates the `IndirectPass` (and its radiance pyramid).
+    pub fn creates_indirect(&self) -> bool {
+        self.indirect
+    }
+
+    /// Indirect bounces each indirect frame records.
+    pub fn bounces(&self) -> u32 {
+        self.bounces
+    }
+
+    /// Why there is no indirect light, if there is none.
+    fn no_indirect(&self) -> Option<String> {
+        if self.bounces == 0 {
+            Some("gi.bounces = 0".into())
+        } else if !self.indirect {
+            Some("the surface reflects nothing (albedo 0 everywhere, no specular)".into())
+        } else {
+            None
+        }
+    }
+
+    fn radiance_kind(&self) -> String {
+        if self.vector {
+            format!(
+                "glossy SH vector pyramid, {} channels (glossy material, gi.glossy_pyramid = \"vector\")",
+                self.channels
+            )
+        } else {
+            let why = if self.glossy_pyramid == GlossyPyramid::Vector {
+                " (gi.glossy_pyramid = \"vector\" asked for, but the material has no specular lobe)"
+            } else {
+                ""
+            };
+            format!("scalar RGB pyramid, 3 channels{why}, {} mode", self.mode)
+        }
+    }
+
+    /// The passes `Renderer::new` creates (and the ones it does not), with reasons.
+    pub fn passes(&self) -> Vec<PlannedPass> {
+        let (w, h) = self.size;
+        let (ww, wh) = self.work;
+        let storage = match self.mode {
+            PyramidMode::Stack => format!("stack mode: {} planes of {ww}×{wh}", self.levels),
+            PyramidMode::Pyramid => "pyramid mode: decimated levels only".into(),
+        };
+        let mut sets = Vec::new();
+        if self.environment {
+            sets.push("environment".to_string());
+        }
+        if self.key_lights > 0 {
+            sets.push(format!("{} key light{}", self.key_lights, plural(self.key_lights)));
+        }
+        let sets = if sets.is_empty() { "no lights: the direct light is black".into() } else { sets.join(", ") };
+        let mut passes = vec![
+            PlannedPass {
+                name: "HeightPyramid",
+                created: true,
+                reason: format!(
+                    "always: {w}×{h} heights, {} levels (k_v = {}), {storage}",
+                    self.levels, self.level_step
+                ),
+            },
+            PlannedPass {
+                name: "VisibilityPass",
+                created: true,
+                reason: format!(
+                    "always: {} light set{} ({sets})",
+                    self.light_sets(),
+                    plural(self.light_sets() as usize)
+                ),
+            },
+            PlannedPass {
+                name: "ShadePass",
+                created: true,
+                reason: "always: the shading texture (total, direct, indirect, glossy)".into(),
+            },
+        ];
+        match self.no_indirect() {
+            Some(why) => {
+                passes.push(PlannedPass { name: "IndirectPass", created: false, reason: why.clone() });
+                passes.push(PlannedPass { name: "RadiancePyramid", created: false, reason: "no IndirectPass".into() });
+            }
+            None => {
+                let reflects = match (self.albedo, self.specular) {
+                    (true, true) => "albedo and specular non-zero",
+                    (true, false) => "albedo non-zero",
+                    _ => "specular non-zero",
+                };
+                passes.push(PlannedPass {
+                    name: "IndirectPass",
+                    created: true,
+                    reason: format!("gi.bounces = {} and the surface reflects light ({reflects})", self.bounces),
+                });
+                passes.push(PlannedPass {
+                    name: "RadiancePyramid",
+                    created: true,
+                    reason: format!(
+                        "part of IndirectPass: {}{}, {} levels (k_u = {})",
+                        self.radiance_kind(),
+                        if self.vector { ", always a true pyramid" } else { "" },
+                        self.radiance_levels,
+                        self.radiance_level_step
+                    ),
+                });
+            }
+        }
+        passes
+    }
+
+    fn light_sets(&self) -> u32 {
+        self.environment as u32 + self.key_lights as u32
+    }
+
+    /// The stages of `frame`, in recording order, with reasons.
+    pub fn plan(&self, frame: &FrameState) -> Plan {
+        let mut stages = Vec::new();
+        let mut omitted = Vec::new();
+        let add = |list: &mut Vec<PlannedStage>, stage: Stage, reason: String| {
+            list.push(PlannedStage { stage, name: stage.name(), reason })
+        };
+        let changed = frame.heights_changed;
+        let odd = frame.frame_index % 2 == 1;
+        // 1. Heights: pyramid and visibility, only when the heights changed.
+        if changed {
+            let why = if frame.frame_index == 0 {
+                "first frame: heights uploaded"
+            } else {
+                "heights changed since the last frame"
+            };
+            add(
+                &mut stages,
+                Stage::PyramidDecimate,
+                format!("{why}; {} levels (k_v = {})", self.levels, self.level_step),
+            );
+            match self.mode {
+                PyramidMode::Stack => add(
+                    &mut stages,
+                    Stage::PyramidSynthesize,
+                    format!(
+                        "stack mode: {} levels resampled to the {}×{} working grid",
+                        self.levels, self.work.0, self.work.1
+                    ),
+                ),
+                PyramidMode::Pyramid => add(
+                    &mut omitted,
+                    Stage::PyramidSynthesize,
+                    "pyramid mode: the levels are B-spline filtered on the fly".into(),
+                ),
+            }
+            if self.environment {
+                let r = format!("environment light is non-zero ({} azimuths); {why}", self.azimuths);
+                add(&mut stages, Stage::VisibilityEnvironment, r);
+            } else {
+                add(
+                    &mut omitted,
+                    Stage::VisibilityEnvironment,
+                    "environment light is zero (all SH coefficients 0)".into(),
+                );
+            }
+            if self.key_lights > 0 {
+                let (k, a) = (self.key_lights, self.key_light_azimuths);
+                let r = format!("{k} key light{} ({a} azimuths each); {why}", plural(k));
+                add(&mut stages, Stage::VisibilityKeyLights, r);
+            } else {
+                add(&mut omitted, Stage::VisibilityKeyLights, "no key lights".into());
+            }
+        } else {
+            let why = "heights unchanged since the last frame: the pyramid is kept";
+            add(&mut omitted, Stage::PyramidDecimate, why.into());
+            if self.mode == PyramidMode::Stack {
+                add(&mut omitted, Stage::PyramidSynthesize, why.into());
+            }
+            let why = "heights unchanged since the last frame: the visibility is kept";
+            if self.environment {
+                add(&mut omitted, Stage::VisibilityEnvironment, why.into());
+            }
+            if self.key_lights > 0 {
+                add(&mut omitted, Stage::VisibilityKeyLights, why.into());
+            }
+        }
+        // 2. Direct shading and 3. the bounces, amortised over static frames (§7).
+        let no_indirect = self.no_indirect();
+        let (direct, indirect, when) = if changed && no_indirect.is_some() {
+            (true, true, "heights changed: the direct light is shaded")
+        } else if changed {
+            (true, true, "heights changed: direct and indirect light both shaded")
+        } else if !self.amortize && no_indirect.is_some() {
+            (true, true, "gi.amortize = false: every frame shades the direct light")
+        } else if !self.amortize {
+            (true, true, "gi.amortize = false: every frame shades direct and indirect light")
+        } else if odd {
+            (false, true, "amortised: odd static frame shades the indirect light")
+        } else {
+            (true, false, "amortised: even static frame shades the direct light")
+        };
+        if direct {
+            add(&mut stages, Stage::ShadeDirect, when.into());
+        } else if no_indirect.is_some() {
+            let r = "amortised: odd static frame shades the indirect light, and there is none (the shading is kept)";
+            add(&mut omitted, Stage::ShadeDirect, r.into());
+        } else {
+            add(&mut omitted, Stage::ShadeDirect, format!("{when} only"));
+        }
+        let synthesize = !self.vector && self.mode == PyramidMode::Stack;
+        let indirect_stages = [
+            Stage::RadianceGather(0),
+            Stage::RadianceDecimate(0),
+            Stage::RadianceSynthesize(0),
+            Stage::IndirectScan(0),
+            Stage::IndirectShade(0),
+        ];
+        if let Some(why) = no_indirect {
+            for s in indirect_stages {
+                add(&mut omitted, s, format!("{why}: no indirect light"));
+            }
+        } else if !indirect {
+            for s in indirect_stages.into_iter().filter(|s| synthesize || *s != Stage::RadianceSynthesize(0)) {
+                add(&mut omitted, s, format!("{when} only"));
+            }
+        } else {
+            let n = self.bounces;
+            for b in 1..=n {
+                let of = format!("gi.bounces = {n}, bounce {b} of {n}");
+                let src = if b == 1 {
+                    "the direct exit radiance".to_string()
+                } else {
+                    format!("bounce {}'s exit radiance", b - 1)
+                };
+                let first = if b == 1 { format!(" ({when})") } else { String::new() };
+                add(&mut stages, Stage::RadianceGather(b), format!("{of}: gathers {src}{first}"));
+                add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {}", self.radiance_kind()));
+                if synthesize {
+                    let r = format!("{of}: stack mode, scalar radiance pyramid");
+                    add(&mut stages, Stage::RadianceSynthesize(b), r);
+                } else if b == 1 {
+                    let why = if self.vector {
+                        "the glossy vector pyramid is always a true pyramid"
+                    } else {
+                        "pyramid mode: the radiance levels are B-spline filtered on the fly"
+                    };
+                    add(&mut omitted, Stage::RadianceSynthesize(0), why.into());
+                }
+                let r = format!("{of}: IR vector per receiver ({} azimuths)", self.azimuths);
+                add(&mut stages, Stage::IndirectScan(b), r);
+                let acc = if b == 1 { "writes the indirect planes" } else { "adds to the indirect planes" };
+                add(&mut stages, Stage::IndirectShade(b), format!("{of}: {acc}"));
+            }
+        }
+        Plan { frame: *frame, stages, omitted, passes: self.passes() }
+    }
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}

@@ -1,0 +1,299 @@
+//! The frame plan (docs/plan.md): for each rule, the exact planned stage list, then the frame
+//! rendered on the GPU — the recorded stages (`Recorder::stages`) and the timed stages
+//! (`StageTimer::timings`) must equal the plan exactly. And `hfgi plan` needs no Vulkan device.
+
+mod common;
+
+use common::scenes::{key_light, scene};
+use common::{gpu, rough_field};
+use hfgi::frame::plan::{plan, FrameState, Plan};
+use hfgi::frame::Renderer;
+use hfgi::scene::model::{Albedo, Environment, GlossyPyramid, PyramidMode, Scene};
+use hfgi::vk::{Context, Recorder, StageTimer};
+
+const PD: &str = "pyramid.decimate";
+const PS: &str = "pyramid.synthesize";
+const VE: &str = "visibility.environment";
+const VK: &str = "visibility.key_lights";
+const SD: &str = "shade.direct";
+const RG: &str = "radiance.gather";
+const RD: &str = "radiance.decimate";
+const RS: &str = "radiance.synthesize";
+const IS: &str = "indirect.scan";
+const ISH: &str = "indirect.shade";
+
+/// A small scene (24², 8 azimuths): sky + one key light, albedo 0.7, no bounces.
+fn base() -> Scene {
+    let mut s = scene(rough_field(24, 24, 11));
+    s.gi.azimuths = 8;
+    s
+}
+
+fn zero_environment() -> Environment {
+    Environment { sh: vec![[0.0; 3]; 16] }
+}
+
+/// `[heights stages] + [shade.direct] + bounces × [gather, decimate, (synthesize), scan, shade]`.
+fn frame_stages(heights: &[&'static str], direct: bool, bounces: u32, synth: bool) -> Vec<&'static str> {
+    let mut v = heights.to_vec();
+    if direct {
+        v.push(SD);
+    }
+    for _ in 0..bounces {
+        v.extend([RG, RD]);
+        if synth {
+            v.push(RS);
+        }
+        v.extend([IS, ISH]);
+    }
+    v
+}
+
+/// Plans and renders `expected.len()` frames of `scene` (static after the first, or with new
+/// heights on the frames in `changed`); checks that the pure plan, `Renderer::plan_next`, the
+/// recorded stages and the timestamps all equal `expected[f]` exactly. Returns the plans.
+fn check_frames(ctx: &Context, what: &str, scene: &Scene, changed: &[u64], expected: &[Vec<&str>]) -> Vec<Plan> {
+    let mut r = Renderer::new(ctx, scene).unwrap();
+    let mut timer = StageTimer::new(ctx, 96).unwrap();
+    let mut plans = Vec::new();
+    for (f, want) in expected.iter().enumerate() {
+        let f = f as u64;
+        let heights_changed = f == 0 || changed.contains(&f);
+        if heights_changed && f > 0 {
+            r.mark_heights_changed();
+        }
+        let p = plan(scene, &FrameState { heights_changed, frame_index: f });
+        eprintln!("{what}, {p}");
+        assert_eq!(p.names(), *want, "{what}: planned stages of frame {f}");
+        assert_eq!(r.plan_next(), p, "{what}: Renderer::plan_next of frame {f} differs from plan()");
+        let recorded = ctx
+            .submit_and_wait(|cmd| {
+                let mut rec = Recorder::new(ctx, cmd, Some(&mut timer));
+                r.record(&mut rec);
+                Ok(rec.stages().to_vec())
+            })
+            .unwrap();
+        assert_eq!(recorded, *want, "{what}: recorded stages of frame {f}");
+        let timed: Vec<String> = timer.timings(ctx).unwrap().into_iter().map(|(n, _)| n).collect();
+        assert_eq!(timed, *want, "{what}: timed stages of frame {f}");
+        plans.push(p);
+    }
+    let builds = expected.iter().filter(|s| s.contains(&PD)).count() as u64;
+    assert_eq!(r.stats().frames, expected.len() as u64, "{what}");
+    assert_eq!(r.stats().pyramid_builds, builds, "{what}");
+    r.destroy(ctx);
+    timer.destroy(ctx);
+    plans
+}
+
+fn reason<'a>(p: &'a Plan, name: &str) -> &'a str {
+    &p.stages.iter().find(|s| s.name == name).unwrap_or_else(|| panic!("no stage {name}")).reason
+}
+
+fn omitted<'a>(p: &'a Plan, name: &str) -> &'a str {
+    &p.omitted.iter().find(|s| s.name == name).unwrap_or_else(|| panic!("{name} not listed as omitted")).reason
+}
+
+fn pass_created(p: &Plan, name: &str) -> (bool, String) {
+    let pass = p.passes().iter().find(|x| x.name == name).unwrap_or_else(|| panic!("no pass {name}"));
+    (pass.created, pass.reason.clone())
+}
+
+#[test]
+fn environment_only_key_lights_only_and_both() {
+    let ctx = gpu();
+    let mut env_only = base();
+    env_only.key_lights.clear();
+    let p = &check_frames(&ctx, "environment only", &env_only, &[], &[vec![PD, PS, VE, SD]])[0];
+    assert!(reason(p, VE).contains("environment light is non-zero"), "{p}");
+    assert_eq!(omitted(p, VK), "no key lights");
+
+    let mut keys_only = base();
+    keys_only.environment = zero_environment();
+    keys_only.key_lights.push(key_light(50.0, 30.0, 4.0, 3.0));
+    let p = &check_frames(&ctx, "key lights only", &keys_only, &[], &[vec![PD, PS, VK, SD]])[0];
+    assert!(reason(p, VK).starts_with("2 key lights"), "{p}");
+    assert!(omitted(p, VE).contains("environment light is zero"), "{p}");
+    assert!(pass_created(p, "VisibilityPass").1.contains("2 light sets (2 key lights)"), "{p:?}");
+
+    let p = &check_frames(&ctx, "both", &base(), &[], &[vec![PD, PS, VE, VK, SD]])[0];
+    assert!(reason(p, PD).contains("first frame"), "{p}");
+    assert!(reason(p, PS).contains("stack mode"), "{p}");
+
+    // No light at all: still the pyramid and the (black) direct shading, no visibility stage.
+    let mut dark = base();
+    dark.environment = Environment::default();
+    dark.key_lights.clear();
+    check_frames(&ctx, "no lights", &dark, &[], &[vec![PD, PS, SD]]);
+}
+
+#[test]
+fn bounces_zero_two_and_a_surface_that_reflects_nothing() {
+    let ctx = gpu();
+    let mut s = base();
+    s.gi.bounces = 0;
+    let p = &check_frames(&ctx, "bounces 0", &s, &[], &[vec![PD, PS, VE, VK, SD]])[0];
+    assert_eq!(pass_created(p, "IndirectPass"), (false, "gi.bounces = 0".into()));
+    assert!(omitted(p, IS).contains("gi.bounces = 0"), "{p}");
+
+    s.gi.bounces = 2;
+    let want = frame_stages(&[PD, PS, VE, VK], true, 2, true);
+    let p = &check_frames(&ctx, "bounces 2", &s, &[], &[want])[0];
+    assert!(pass_created(p, "IndirectPass").0 && pass_created(p, "RadiancePyramid").0);
+    let gathers: Vec<&str> = p.stages.iter().filter(|x| x.name == RG).map(|x| x.reason.as_str()).collect();
+    assert!(gathers[0].starts_with("gi.bounces = 2, bounce 1 of 2"), "{gathers:?}");
+    assert!(
+        gathers[1].starts_with("gi.bounces = 2, bounce 2 of 2") && gathers[1].contains("bounce 1's"),
+        "{gathers:?}"
+    );
+
+    // Albedo 0 everywhere (a map) and a zero specular lobe: no indirect pass, no radiance pyramid.
+    s.material.albedo = Albedo::Map(vec![[0.0; 3]; 24 * 24]);
+    s.material.specular = Some([0.0; 3]);
+    let p = &check_frames(&ctx, "albedo 0, bounces 2", &s, &[], &[vec![PD, PS, VE, VK, SD]])[0];
+    let (created, why) = pass_created(p, "IndirectPass");
+    assert!(!created && why.contains("reflects nothing"), "{why}");
+    assert!(!pass_created(p, "RadiancePyramid").0);
+    assert!(omitted(p, RG).contains("reflects nothing"), "{p}");
+
+    // Albedo 0 with a non-zero specular lobe still reflects light: the bounces are there.
+    s.material.specular = Some([0.3; 3]);
+    s.material.exponent = 8.0;
+    check_frames(&ctx, "albedo 0, glossy", &s, &[], &[frame_stages(&[PD, PS, VE, VK], true, 2, true)]);
+}
+
+#[test]
+fn glossy_vector_pyramid_only_with_a_glossy_material() {
+    let ctx = gpu();
+    let mut s = base();
+    s.gi.bounces = 1;
+    s.gi.glossy_pyramid = GlossyPyramid::Vector;
+    s.material.specular = Some([0.3; 3]);
+    s.material.exponent = 8.0;
+    // The vector pyramid is always a true pyramid: no radiance.synthesize even in stack mode.
+    let want = frame_stages(&[PD, PS, VE, VK], true, 1, false);
+    let p = &check_frames(&ctx, "glossy, vector", &s, &[], &[want])[0];
+    assert!(reason(p, RD).contains("glossy SH vector pyramid, 51 channels"), "{p}");
+    assert!(omitted(p, RS).contains("always a true pyramid"), "{p}");
+    assert!(pass_created(p, "RadiancePyramid").1.contains("vector"));
+
+    // Diffuse with the vector pyramid requested: the scalar pyramid, synthesized in stack mode.
+    s.material.specular = None;
+    let want = frame_stages(&[PD, PS, VE, VK], true, 1, true);
+    let p = &check_frames(&ctx, "diffuse, vector requested", &s, &[], &[want])[0];
+    assert!(reason(p, RD).contains("scalar RGB pyramid, 3 channels"), "{p}");
+    assert!(reason(p, RD).contains("no specular lobe"), "{p}");
+}
+
+#[test]
+fn synthesize_stages_only_in_stack_mode() {
+    let ctx = gpu();
+    let mut s = base();
+    s.gi.bounces = 1;
+    s.gi.pyramid = PyramidMode::Stack;
+    check_frames(&ctx, "stack", &s, &[], &[frame_stages(&[PD, PS, VE, VK], true, 1, true)]);
+    s.gi.pyramid = PyramidMode::Pyramid;
+    let p = &check_frames(&ctx, "pyramid", &s, &[], &[frame_stages(&[PD, VE, VK], true, 1, false)])[0];
+    assert!(omitted(p, PS).contains("pyramid mode"), "{p}");
+    assert!(omitted(p, RS).contains("pyramid mode"), "{p}");
+}
+
+#[test]
+fn static_frames_keep_the_pyramid_and_amortise_the_shading() {
+    let ctx = gpu();
+    let mut s = base();
+    s.gi.bounces = 1;
+    let full = frame_stages(&[PD, PS, VE, VK], true, 1, true);
+    let indirect = frame_stages(&[], false, 1, true);
+    let direct = vec![SD];
+    // Amortised: odd static frames the indirect light, even ones the direct; frame 4 has new
+    // heights and records everything again.
+    s.gi.amortize = true;
+    let plans = check_frames(
+        &ctx,
+        "amortised",
+        &s,
+        &[4],
+        &[full.clone(), indirect.clone(), direct.clone(), indirect.clone(), full.clone()],
+    );
+    assert!(reason(&plans[1], RG).contains("amortised: odd static frame"), "{}", plans[1]);
+    assert!(reason(&plans[2], SD).contains("amortised: even static frame"), "{}", plans[2]);
+    assert!(omitted(&plans[1], PD).contains("heights unchanged"), "{}", plans[1]);
+    assert!(omitted(&plans[2], VE).contains("heights unchanged"), "{}", plans[2]);
+    assert!(reason(&plans[4], PD).contains("heights changed since the last frame"), "{}", plans[4]);
+    // Not amortised: every static frame shades both, without rebuilding the pyramid.
+    s.gi.amortize = false;
+    let both = frame_stages(&[], true, 1, true);
+    let plans = check_frames(&ctx, "not amortised", &s, &[], &[full, both.clone(), both]);
+    assert!(reason(&plans[1], SD).contains("gi.amortize = false"), "{}", plans[1]);
+    // No indirect light and amortised: odd static frames record nothing at all.
+    s.gi.amortize = true;
+    s.gi.bounces = 0;
+    check_frames(&ctx, "amortised, no bounces", &s, &[], &[vec![PD, PS, VE, VK, SD], vec![], vec![SD]]);
+}
+
+#[test]
+fn plan_is_pure_and_lists_every_pass() {
+    // No GPU: the plan of a scene is a function of the scene and the frame state.
+    let mut s = base();
+    s.gi.bounces = 3;
+    let p = plan(&s, &FrameState::first());
+    assert_eq!(p.names(), frame_stages(&[PD, PS, VE, VK], true, 3, true));
+    assert_eq!(p, plan(&s, &FrameState::static_scene(0)));
+    let names: Vec<&str> = p.passes().iter().map(|x| x.name).collect();
+    assert_eq!(names, ["HeightPyramid", "VisibilityPass", "ShadePass", "IndirectPass", "RadiancePyramid"]);
+    assert!(p.passes().iter().all(|x| x.created && !x.reason.is_empty()));
+    let text = format!("{}{p}", p.passes_text());
+    for line in ["pyramid.decimate", "gi.bounces = 3, bounce 3 of 3", "IndirectPass", "created"] {
+        assert!(text.contains(line), "{line} missing from\n{text}");
+    }
+    assert!(p.stages.iter().all(|x| !x.reason.is_empty()));
+}
+
+#[test]
+fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi"))
+        .args(["plan", "scenes/default.toml", "--set", "gi.bounces=1", "--frames", "3"])
+        // No usable Vulkan driver: creating a context would fail.
+        .env("VK_DRIVER_FILES", "/nonexistent/hfgi-no-driver.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/hfgi-no-driver.json")
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .expect("run hfgi plan");
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    eprintln!("{text}");
+    assert!(out.status.success(), "hfgi plan failed:\n{text}");
+    for want in [
+        "passes (Renderer::new):",
+        "IndirectPass     created",
+        "frame 0 (heights changed): 10 stages",
+        "1. pyramid.decimate         first frame: heights uploaded",
+        "2. pyramid.synthesize       stack mode",
+        "3. visibility.environment   environment light is non-zero",
+        "4. visibility.key_lights    1 key light",
+        "5. shade.direct             heights changed",
+        "6. radiance.gather          gi.bounces = 1, bounce 1 of 1",
+        "10. indirect.shade",
+        "frame 1 (heights unchanged): 5 stages",
+        "amortised: odd static frame shades the indirect light",
+        "frame 2 (heights unchanged): 1 stage",
+        "1. shade.direct             amortised: even static frame shades the direct light",
+        "not recorded: heights unchanged since the last frame",
+    ] {
+        assert!(text.contains(want), "`hfgi plan` output lacks {want:?}");
+    }
+    // The CLI's stage list is the library's plan of the same scene.
+    let scene =
+        hfgi::scene::file::load_scene(std::path::Path::new("scenes/default.toml"), &["gi.bounces=1".into()]).unwrap();
+    for f in 0..3 {
+        let p = plan(&scene, &FrameState::static_scene(f));
+        assert!(text.contains(&p.to_string()), "frame {f} of the plan is not in the output:\n{p}");
+    }
+    // Bad input is an error, not a panic.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi"))
+        .args(["plan", "scenes/default.toml", "--frames", "0"])
+        .output()
+        .expect("run hfgi plan");
+    let text = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && text.contains("--frames 0") && !text.contains("panicked"), "{text}");
+}
