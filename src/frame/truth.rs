@@ -25,10 +25,20 @@ use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKin
 
 pub const STAGE_TRUTH: &str = "reference.truth";
 
-/// Azimuths per dispatch. lavapipe silently ends an invocation's loops early once they have run
-/// too long (measured: a 16² flat field lost 45% of its light at 256 azimuths in one dispatch,
-/// none at 128), so the azimuth integral is accumulated over several dispatches.
-pub const AZIMUTH_CHUNK: u32 = 16;
+/// Loop iterations one invocation may run per dispatch. lavapipe silently ends an invocation's
+/// loops after 65535 iterations in total (measured: a 16² flat field lost 45% of its light at
+/// 256 azimuths in one dispatch; a 512-texel periodic march lost 2 of 16 azimuths), so the
+/// azimuth integral is accumulated over dispatches that stay well below that.
+pub const LOOP_BUDGET: u64 = 40_000;
+
+/// Azimuths per dispatch for a `w × h` field: the march (twice for a bounce) plus the
+/// Gauss–Legendre nodes with their SH loops must fit [`LOOP_BUDGET`].
+pub fn azimuth_chunk(w: usize, h: usize, wrap: bool, settings: &TruthSettings, n: usize) -> u32 {
+    let reach = w.max(h) as f64 * if wrap { 1.0 } else { std::f64::consts::SQRT_2 };
+    let march = (reach / settings.step).ceil() as u64 + 2;
+    let per_azimuth = 2 * march + settings.nodes as u64 * (3 * (n * n) as u64 + 16) + 4;
+    (LOOP_BUDGET / per_azimuth).clamp(1, 64) as u32
+}
 
 /// Renders the ground truth of `scene` on the GPU. `progress(done, total)` counts texel rows
 /// over all bounces.
@@ -94,6 +104,7 @@ pub fn render_truth_gpu_timed(
         let rho = albedo(scene);
         let tri = triple::triple(n);
         let rows_per_band = (16384 / w.max(1)).clamp(1, h) as u32;
+        let chunk = azimuth_chunk(w, h, scene.wrap, settings, n);
         let passes = scene.gi.bounces as u64 + 1;
         let total = passes * h as u64;
         let mut done = 0u64;
@@ -119,7 +130,7 @@ pub fn render_truth_gpu_timed(
                                 row_offset: row,
                                 rows,
                                 azimuth_first: first,
-                                azimuth_count: AZIMUTH_CHUNK.min(settings.azimuths - first),
+                                azimuth_count: chunk.min(settings.azimuths - first),
                             };
                             let g = [groups(w as u32, 8), groups(rows, 8), 1];
                             p.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), g);
