@@ -132,3 +132,76 @@ fn render_writes_the_view_png_and_exr_and_the_shading_texture() {
     let r = &channels.iter().find(|(l, c, _)| l.is_empty() && c == "R").unwrap().2;
     assert!(r.iter().all(|v| v.is_finite() && *v >= 0.0) && r.iter().any(|v| *v > 0.0));
 }
+
+#[test]
+fn reference_writes_the_layers_and_matches_the_cpu_version() {
+    let dir = tempfile::tempdir().unwrap();
+    let (gpu, cpu) = (dir.path().join("gpu.exr"), dir.path().join("cpu.exr"));
+    let common = ["--set", "heightfield.size=16", "--set", "gi.bounces=1", "--azimuths", "32"];
+    for (path, extra) in [(&gpu, None), (&cpu, Some("--cpu"))] {
+        let mut args = vec!["reference", "scenes/craters.toml", "--shading-exr", path.to_str().unwrap()];
+        args.extend(common);
+        args.extend(extra);
+        let (ok, msg) = hfgi(&args);
+        assert!(ok, "{msg}");
+        assert!(msg.contains("reference took"), "{msg}");
+    }
+    let read = |p: &std::path::Path| {
+        let (w, h, ch) = hfgi::io::exr::read_layers(p).unwrap();
+        assert_eq!((w, h), (16, 16));
+        ch
+    };
+    let (g, c) = (read(&gpu), read(&cpu));
+    for layer in ["", "direct", "indirect", "glossy"] {
+        for chan in ["R", "G", "B"] {
+            let find = |v: &[hfgi::io::exr::ExrChannel]| v.iter().find(|(l, n, _)| l == layer && n == chan).unwrap().2.clone();
+            let (a, b) = (find(&g), find(&c));
+            let (num, den) = a.iter().zip(&b).fold((0.0f64, 0.0f64), |(n, d), (x, y)| {
+                (n + (*x as f64 - *y as f64).powi(2), d + (*y as f64).powi(2))
+            });
+            let rel = if den > 0.0 { (num / den).sqrt() } else { num.sqrt() };
+            assert!(rel <= 1e-4, "layer {layer:?}.{chan}: GPU vs CPU reference {rel:e}");
+        }
+    }
+    let (ok, msg) = hfgi(&["reference", "--cpu", "--set", "heightfield.size=65", "--shading-exr", "/tmp/hfgi-x.exr"]);
+    assert!(!ok && msg.contains("64²") && !msg.contains("panicked"), "{msg}");
+    let (ok, msg) = hfgi(&["reference", "--azimuths", "2", "--shading-exr", "/tmp/hfgi-x.exr"]);
+    assert!(!ok && msg.contains("azimuths") && !msg.contains("panicked"), "{msg}");
+}
+
+#[test]
+fn bench_writes_csv_markdown_and_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let (ok, msg) = hfgi(&[
+        "bench",
+        "--scenes",
+        "scenes/default.toml",
+        "--size",
+        "16",
+        "--quick",
+        "--frames",
+        "2",
+        "--reference-azimuths",
+        "32",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{msg}");
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in ["azimuths", "level_step", "total_ms", "memory_bytes", "exact_total", "shvis_total", "stages"] {
+        assert!(header.contains(&col), "column {col} missing: {header:?}");
+    }
+    let rows: Vec<&str> = lines.collect();
+    assert!(rows.len() >= 10, "{} configurations", rows.len());
+    let total_col = header.iter().position(|c| *c == "exact_total").unwrap();
+    let baseline: Vec<&str> = rows[0].split(',').collect();
+    let err: f64 = baseline[total_col].parse().unwrap();
+    assert!(err.is_finite() && err > 0.0 && err < 1.0, "baseline error {err}");
+    let md = std::fs::read_to_string(out.join("results.md")).unwrap();
+    assert!(md.contains("Brute-force reference") && md.contains("| baseline |"), "{md}");
+    let png = image::open(out.join("pareto-default.png")).unwrap();
+    assert!(png.width() >= 400);
+}

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian packages hfgi needs (Vulkan loader, lavapipe, validation layers and the
-# static shaderc/glslang/SPIRV-Tools libraries), only those missing. Needs root or sudo.
+# static shaderc/glslang/SPIRV-Tools libraries, and the DejaVu font that `hfgi bench` plots use),
+# only those missing. Needs root or sudo.
 set -euo pipefail
-pkgs=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools)
+pkgs=(libvulkan1 mesa-vulkan-drivers vulkan-validationlayers libshaderc-dev glslang-dev spirv-tools fonts-dejavu-core)
 if [ "${HFGI_SHADERC_FROM_SOURCE:-0}" = 1 ]; then pkgs+=(cmake ninja-build python3 g++); fi
 missing=()
 for p in "${pkgs[@]}"; do

@@ -1,5 +1,7 @@
 //! `hfgi` — command-line front end of the hfgi library.
 
+mod bench;
+mod plot;
 mod reference;
 
 use std::path::{Path, PathBuf};
@@ -56,6 +58,17 @@ enum Command {
     /// projects the exact visibility and indirect radiance to order-n SH first. On the GPU
     /// (compute) with a progress bar; --cpu runs the f64 CPU version (fields up to 64²).
     Reference(reference::ReferenceArgs),
+    /// Measure what accuracy costs in time (docs/accuracy.md).
+    ///
+    /// For each scene (rendered at --size² texels, surfaces treated as diffuse): computes the
+    /// exact and the SH-visibility ground truth on the GPU (timed), then sweeps the algorithm's
+    /// knobs one at a time around the scene's settings — azimuths m, level step k, level
+    /// offset o, sub-sampling, interpolation, SH order, pyramid mode, bounces — plus an m × k
+    /// grid (the paper's figure 10). Every configuration: per-stage time (median of --frames
+    /// frames after a warm-up), GPU memory, relative L2 error per layer against both
+    /// references. Writes DIR/results.csv, DIR/results.md and DIR/pareto-<scene>.png (error
+    /// against time, Pareto front marked). lavapipe times are labelled as CPU times.
+    Bench(bench::BenchArgs),
     /// Print the passes and the stages a frame records, with the reason for each (no GPU).
     ///
     /// Plans the scene as `Renderer::new` and `Renderer::record` do (docs/plan.md) without
@@ -698,6 +711,7 @@ fn main() -> Result<()> {
         Command::Render(a) => render(a),
         Command::Animate(a) => animate(a),
         Command::Reference(a) => reference::reference(a),
+        Command::Bench(a) => bench::bench(a),
         Command::Plan(a) => plan(a),
         Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),

@@ -1,0 +1,390 @@
+//! `hfgi bench`: what accuracy costs in time (docs/accuracy.md). Sweeps the algorithm's knobs
+//! one at a time around the scene's settings (plus an azimuths × level-step grid, the paper's
+//! figure 10), and for every configuration records the per-stage GPU time (median of repeated
+//! frames after warm-up), the GPU memory, and the relative L2 error per layer against both
+//! ground truths; it also times the brute-force reference on the same scene.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _, Result};
+use clap::Args;
+use hfgi::frame::Renderer;
+use hfgi::reference::truth::{TruthOutput, TruthSettings};
+use hfgi::scene::model::{GiSettings, Interpolation, PyramidMode, Scene};
+use hfgi::vk::{Context, Recorder, StageTimer};
+
+use super::{context, load_scene_or_default, plot, DeviceArgs};
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Scene files (comma-separated). Default: the default scene, craters and city blocks.
+    #[arg(long, value_delimiter = ',', default_value = "scenes/default.toml,scenes/craters.toml,scenes/city.toml")]
+    scenes: Vec<PathBuf>,
+    /// Field size (texels per side) the scenes are rendered at (heightfield.size).
+    #[arg(long, default_value_t = 64)]
+    size: u32,
+    /// Override a setting of every scene, e.g. `--set gi.sh_order=4`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    overrides: Vec<String>,
+    /// Timed frames per configuration (after one warm-up frame); the median is reported.
+    #[arg(long, default_value_t = 5)]
+    frames: u32,
+    /// Bounces of the baseline configuration (the sweep over bounces covers 0..=3).
+    #[arg(long, default_value_t = 1)]
+    bounces: u32,
+    /// A small sweep (for tests and quick looks): fewer values per knob, no grid.
+    #[arg(long)]
+    quick: bool,
+    /// Azimuths of the ground truth (CONVENTIONS.md: at least 256).
+    #[arg(long, default_value_t = 256)]
+    reference_azimuths: u32,
+    /// Output folder: results.csv, results.md, pareto-<scene>.png.
+    #[arg(long, default_value = "out/bench")]
+    out: PathBuf,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+/// One configuration's measurements.
+struct Row {
+    scene: String,
+    knob: String,
+    gi: GiSettings,
+    stages: Vec<(String, f64)>,
+    total_ms: f64,
+    memory: u64,
+    /// Relative L2 (direct, indirect, total) against the exact and the SH-visibility truth.
+    exact: [f64; 3],
+    shvis: [f64; 3],
+}
+
+/// The configurations: the baseline, then one knob at a time, then (full sweep) the m × k grid.
+fn configs(base: &GiSettings, quick: bool) -> Vec<(String, GiSettings)> {
+    let mut out = vec![("baseline".to_string(), base.clone())];
+    let mut push = |knob: &str, f: &dyn Fn(&mut GiSettings)| {
+        let mut g = base.clone();
+        f(&mut g);
+        if g != *base && !out.iter().any(|(_, o)| *o == g) {
+            out.push((knob.to_string(), g));
+        }
+    };
+    let ms: &[u32] = if quick { &[8, 16] } else { &[4, 8, 16, 32, 64, 128] };
+    for &m in ms {
+        push("azimuths", &|g| g.azimuths = m);
+    }
+    let ks: &[u32] = if quick { &[2] } else { &[1, 2, 4, 8, 16] };
+    for &k in ks {
+        push("level_step", &|g| g.level_step = k);
+    }
+    let os: &[u32] = if quick { &[0] } else { &[0, 1, 2, 3, 4] };
+    for &o in os {
+        push("level_offset", &|g| g.level_offset = o);
+    }
+    for s in [1, 2, 4] {
+        push("subsample", &|g| g.subsample = s);
+    }
+    for i in [Interpolation::Linear, Interpolation::Bspline] {
+        push("interpolation", &|g| g.interpolation = i);
+    }
+    let ns: &[usize] = if quick { &[3] } else { &[3, 4, 5, 6] };
+    for &n in ns {
+        push("sh_order", &|g| g.sh_order = n);
+    }
+    for p in [PyramidMode::Stack, PyramidMode::Pyramid] {
+        push("pyramid", &|g| g.pyramid = p);
+    }
+    for b in 0..=3 {
+        push("bounces", &|g| g.bounces = b);
+    }
+    if !quick {
+        for m in [8, 16, 32, 64, 128] {
+            for k in [1, 2, 4, 8] {
+                push("grid m×k", &|g| {
+                    g.azimuths = m;
+                    g.level_step = k;
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Relative L2 (CONVENTIONS.md) of `x` against the reference `r`; NaN where `r` is zero.
+fn rel_l2(x: &[[f32; 3]], r: &[[f64; 3]]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (a, b) in x.iter().zip(r) {
+        for c in 0..3 {
+            num += (a[c] as f64 - b[c]).powi(2);
+            den += b[c] * b[c];
+        }
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        f64::NAN
+    }
+}
+
+/// Reference layers for `bounces` bounces: (direct, indirect, total).
+fn truth_layers(t: &TruthOutput, bounces: u32) -> [Vec<[f64; 3]>; 3] {
+    let mut ind = vec![[0.0; 3]; t.direct.len()];
+    for b in t.indirect_bounces.iter().take(bounces as usize) {
+        for (o, v) in ind.iter_mut().zip(b) {
+            for c in 0..3 {
+                o[c] += v[c];
+            }
+        }
+    }
+    let tot = t.direct.iter().zip(&ind).map(|(d, i)| [d[0] + i[0], d[1] + i[1], d[2] + i[2]]).collect();
+    [t.direct.clone(), ind, tot]
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Renders `scene` `1 + frames` times (every stage each frame) and returns the median time per
+/// stage (summed over a stage's repeats within a frame), the memory and the layers.
+fn measure(ctx: &Context, scene: &Scene, frames: u32) -> Result<(Vec<(String, f64)>, u64, hfgi::frame::ShadingLayers)> {
+    let mut r = Renderer::new(ctx, scene)?;
+    let stages = 8 + 5 * scene.gi.bounces;
+    let mut timer = match StageTimer::new(ctx, stages) {
+        Ok(t) => t,
+        Err(e) => {
+            r.destroy(ctx);
+            return Err(e.into());
+        }
+    };
+    let mut per_stage: Vec<(String, Vec<f64>)> = Vec::new();
+    let run = (|| -> Result<hfgi::frame::ShadingLayers> {
+        for f in 0..=frames {
+            r.mark_heights_changed();
+            ctx.submit_and_wait(|cmd| {
+                let mut rec = Recorder::new(ctx, cmd, Some(&mut timer));
+                r.record(&mut rec);
+                Ok(())
+            })?;
+            if f == 0 {
+                continue; // warm-up
+            }
+            let mut frame: Vec<(String, f64)> = Vec::new();
+            for (name, ms) in timer.timings(ctx)? {
+                match frame.iter_mut().find(|(n, _)| *n == name) {
+                    Some((_, acc)) => *acc += ms,
+                    None => frame.push((name, ms)),
+                }
+            }
+            for (name, ms) in frame {
+                match per_stage.iter_mut().find(|(n, _)| *n == name) {
+                    Some((_, v)) => v.push(ms),
+                    None => per_stage.push((name, vec![ms])),
+                }
+            }
+        }
+        Ok(r.read_layers(ctx)?)
+    })();
+    let memory = r.memory_bytes();
+    timer.destroy(ctx);
+    r.destroy(ctx);
+    let layers = run?;
+    Ok((per_stage.into_iter().map(|(n, v)| (n, median(v))).collect(), memory, layers))
+}
+
+fn settings_label(g: &GiSettings) -> String {
+    format!(
+        "n={} m={} k={} o={} s={} {} {} b={}",
+        g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
+    )
+}
+
+pub fn bench(a: BenchArgs) -> Result<()> {
+    if a.frames == 0 {
+        bail!("--frames 0: expected at least 1 timed frame");
+    }
+    let ctx = context(&a.device)?;
+    let info = ctx.info().clone();
+    let lavapipe = info.kind == ash::vk::PhysicalDeviceType::CPU;
+    let clock = if lavapipe { "lavapipe (CPU time, not a GPU time)" } else { "GPU timestamps" };
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    eprintln!("bench on {} ({}), {}×{} fields, {} timed frames per configuration", info.name, info.driver, a.size, a.size, a.frames);
+    let mut rows: Vec<Row> = Vec::new();
+    let mut references: Vec<(String, Option<f64>, Option<f64>)> = Vec::new();
+    for path in &a.scenes {
+        let mut overrides = vec![format!("heightfield.size={}", a.size), format!("gi.bounces={}", a.bounces)];
+        overrides.extend(a.overrides.iter().cloned());
+        let mut scene = load_scene_or_default(Some(path), &overrides)?;
+        // The ground truth treats surfaces as diffuse: benchmark diffuse materials.
+        scene.material.specular = None;
+        let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        let cfgs = configs(&scene.gi, a.quick);
+        let max_b = cfgs.iter().map(|(_, g)| g.bounces).max().unwrap_or(0);
+        let mut truth_scene = scene.clone();
+        truth_scene.gi.bounces = max_b;
+        let bar = indicatif::ProgressBar::new(cfgs.len() as u64 + 2);
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} {wide_bar} {pos}/{len} [{elapsed} < {eta}]") {
+            bar.set_style(style);
+        }
+        bar.set_message(format!("{name}: references"));
+        let ts = TruthSettings { azimuths: a.reference_azimuths, ..Default::default() };
+        let (exact, exact_ms) = hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &ts, &mut |_, _| {})?;
+        bar.inc(1);
+        let shv_settings = TruthSettings { sh_visibility: true, ..ts };
+        let (shvis, shvis_ms) =
+            hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &shv_settings, &mut |_, _| {})?;
+        bar.inc(1);
+        references.push((name.clone(), exact_ms, shvis_ms));
+        for (knob, gi) in cfgs {
+            bar.set_message(format!("{name}: {knob}"));
+            let mut s = scene.clone();
+            s.gi = gi.clone();
+            s.gi.amortize = false;
+            let (stages, memory, layers) = measure(&ctx, &s, a.frames).with_context(|| format!("{name}: {knob}"))?;
+            let (e, v) = (truth_layers(&exact, gi.bounces), truth_layers(&shvis, gi.bounces));
+            let got = [&layers.direct, &layers.indirect, &layers.total];
+            let err = |r: &[Vec<[f64; 3]>; 3]| [0, 1, 2].map(|i| rel_l2(got[i], &r[i]));
+            let total_ms = stages.iter().map(|(_, ms)| ms).sum();
+            rows.push(Row { scene: name.clone(), knob, gi, stages, total_ms, memory, exact: err(&e), shvis: err(&v) });
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        ctx.check_validation()?;
+    }
+    write_outputs(&a, &rows, &references, &info, clock)
+}
+
+fn write_outputs(
+    a: &BenchArgs,
+    rows: &[Row],
+    references: &[(String, Option<f64>, Option<f64>)],
+    info: &hfgi::vk::DeviceInfo,
+    clock: &str,
+) -> Result<()> {
+    let fmt_e = |e: f64| if e.is_finite() { format!("{e:.4e}") } else { "—".into() };
+    // CSV: one row per configuration.
+    let mut csv = String::from(
+        "scene,knob,sh_order,azimuths,level_step,level_offset,subsample,interpolation,pyramid,bounces,total_ms,\
+         memory_bytes,exact_direct,exact_indirect,exact_total,shvis_direct,shvis_indirect,shvis_total,stages,device,driver\n",
+    );
+    for r in rows {
+        let g = &r.gi;
+        let stages: Vec<String> = r.stages.iter().map(|(n, ms)| format!("{n}={ms:.4}")).collect();
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{},{},{},\"{}\",\"{}\"",
+            r.scene,
+            r.knob,
+            g.sh_order,
+            g.azimuths,
+            g.level_step,
+            g.level_offset,
+            g.subsample,
+            g.interpolation,
+            g.pyramid,
+            g.bounces,
+            r.total_ms,
+            r.memory,
+            r.exact[0],
+            r.exact[1],
+            r.exact[2],
+            r.shvis[0],
+            r.shvis[1],
+            r.shvis[2],
+            stages.join(";"),
+            info.name,
+            info.driver
+        );
+    }
+    let csv_path = a.out.join("results.csv");
+    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+
+    // Markdown: per scene, the table; the reference times; the m × k grid.
+    let mut md = String::new();
+    let _ = writeln!(md, "Device: {} ({}), times: {clock}, field {}², {} timed frames (median) after 1 warm-up.\n", info.name, info.driver, a.size, a.frames);
+    for (scene, ex, sv) in references {
+        let t = |v: &Option<f64>| v.map_or("no timestamps".into(), |ms| format!("{ms:.1} ms"));
+        let _ = writeln!(md, "### {scene}\n\nBrute-force reference: exact {}, SH-visibility {} ({}).\n", t(ex), t(sv), clock);
+        let _ = writeln!(
+            md,
+            "| knob | settings | time (ms) | speed-up vs exact reference | memory (MiB) | err exact: direct / indirect / total | err SH-vis: direct / indirect / total |\n|---|---|---|---|---|---|---|"
+        );
+        for r in rows.iter().filter(|r| &r.scene == scene) {
+            let speed = ex.map_or("—".into(), |ms| format!("{:.0}×", ms / r.total_ms));
+            let _ = writeln!(
+                md,
+                "| {} | {} | {:.2} | {} | {:.2} | {} / {} / {} | {} / {} / {} |",
+                r.knob,
+                settings_label(&r.gi),
+                r.total_ms,
+                speed,
+                r.memory as f64 / 1048576.0,
+                fmt_e(r.exact[0]),
+                fmt_e(r.exact[1]),
+                fmt_e(r.exact[2]),
+                fmt_e(r.shvis[0]),
+                fmt_e(r.shvis[1]),
+                fmt_e(r.shvis[2])
+            );
+        }
+        // Figure 10: total error against the exact reference as m and k grow.
+        let grid: Vec<&Row> = rows.iter().filter(|r| &r.scene == scene && r.knob == "grid m×k").collect();
+        if !grid.is_empty() {
+            let mut ms: Vec<u32> = grid.iter().map(|r| r.gi.azimuths).collect();
+            ms.sort();
+            ms.dedup();
+            let mut ks: Vec<u32> = grid.iter().map(|r| r.gi.level_step).collect();
+            ks.sort();
+            ks.dedup();
+            let _ = writeln!(md, "\nTotal error against the exact reference (figure 10): rows m, columns k.\n");
+            let _ = writeln!(md, "| m \\ k | {} |", ks.iter().map(|k| k.to_string()).collect::<Vec<_>>().join(" | "));
+            let _ = writeln!(md, "|---|{}", "---|".repeat(ks.len()));
+            for m in &ms {
+                let cells: Vec<String> = ks
+                    .iter()
+                    .map(|k| {
+                        grid.iter()
+                            .find(|r| r.gi.azimuths == *m && r.gi.level_step == *k)
+                            .map_or("—".into(), |r| format!("{} ({:.1} ms)", fmt_e(r.exact[2]), r.total_ms))
+                    })
+                    .collect();
+                let _ = writeln!(md, "| {m} | {} |", cells.join(" | "));
+            }
+        }
+        // Error against time, Pareto front marked.
+        let points: Vec<plot::Point> = rows
+            .iter()
+            .filter(|r| &r.scene == scene)
+            .map(|r| plot::Point {
+                label: settings_label(&r.gi),
+                time_ms: r.total_ms,
+                error: r.exact[2],
+                group: r.knob.clone(),
+            })
+            .collect();
+        let png = a.out.join(format!("pareto-{scene}.png"));
+        let note = plot::pareto_plot(
+            &png,
+            &format!("{scene}: total error vs time ({clock})"),
+            "time per frame (ms)",
+            "relative L2 error vs exact reference",
+            &points,
+            *ex,
+        )?;
+        if let Some(n) = note {
+            eprintln!("{}: {n}", png.display());
+        }
+        let _ = writeln!(md, "\n![{scene}: error against time](pareto-{scene}.png)\n");
+    }
+    let md_path = a.out.join("results.md");
+    std::fs::write(&md_path, md).with_context(|| format!("writing {}", md_path.display()))?;
+    eprintln!("wrote {}, {} and the plots", csv_path.display(), md_path.display());
+    Ok(())
+}
