@@ -23,7 +23,23 @@ int hfgi_address(int p, int n, bool wrap) {
 float hfgi_fetch(hfgi_Level l, ivec2 p, bool wrap) {
     int x = hfgi_address(p.x, int(l.width), wrap);
     int y = hfgi_address(p.y, int(l.height), wrap);
-    return HFGI_LEVEL_READ(l, l.offset + uint(y) * l.width + uint(x));
+    // Relative to the level's bias (the height origin z0 on level 0): exact for heights near z0.
+    return HFGI_LEVEL_READ(l, l.offset + uint(y) * l.width + uint(x)) - l.bias;
+}
+
+// Linear interpolation in base-relative form, a + t·(b − a): equal inputs give exactly that
+// input, and the rounding error is relative to |b − a| instead of to |a| (docs/hard-cases.md:
+// with a weighted sum a·(1−t) + b·t, a plateau at 1e7 or a 4e6 wall came out ±1 from texel to
+// texel in f32, which is a false horizon of 45° one texel away).
+float hfgi_lerp(float a, float b, float t) {
+    return a + t * (b - a);
+}
+
+// Bilinear interpolation of a (x0,y0), b (x1,y0), c (x0,y1), d (x1,y1) with fractions f,
+// separably (x, then y) in base-relative form: rows that are equal give exactly the row's value,
+// so a field that does not vary along y is filtered exactly the same on every row.
+float hfgi_bilerp(float a, float b, float c, float d, vec2 f) {
+    return hfgi_lerp(hfgi_lerp(a, b, f.x), hfgi_lerp(c, d, f.x), f.y);
 }
 
 // Bilinear interpolation between texels base and base+1 with fractions f in [0, 1].
@@ -34,7 +50,7 @@ float hfgi_bilinear(hfgi_Level l, ivec2 base, vec2 f, bool wrap) {
     float b = hfgi_fetch(l, base + ivec2(1, 0), wrap);
     float c = hfgi_fetch(l, base + ivec2(0, 1), wrap);
     float d = hfgi_fetch(l, base + ivec2(1, 1), wrap);
-    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+    return hfgi_bilerp(a, b, c, d, f);
 }
 
 float hfgi_bilinear_at(hfgi_Level l, vec2 pos, bool wrap) {
@@ -45,7 +61,9 @@ float hfgi_bilinear_at(hfgi_Level l, vec2 pos, bool wrap) {
 // Uniform cubic B-spline (SN08 eq. 4.9–4.12) at pos, as four bilinear taps
 // (Sigg & Hadwiger 2005, "Fast third-order texture filtering"): per axis the weights
 // w0..w3 of texels i-1..i+2 collapse into g0 = w0+w1 at i-1 + w1/g0 and g1 = w2+w3 at
-// i+1 + w3/g1. Integer bases and fractions are kept apart for precision.
+// i+1 + w3/g1. Integer bases and fractions are kept apart for precision. The taps are
+// combined as a bilinear blend with weight g1 (g0 = 1 − g1), in base-relative form like
+// hfgi_bilerp, so a constant region is reproduced exactly.
 float hfgi_bspline_at(hfgi_Level l, vec2 pos, bool wrap) {
     vec2 fl = floor(pos);
     vec2 t = pos - fl;
@@ -65,7 +83,7 @@ float hfgi_bspline_at(hfgi_Level l, vec2 pos, bool wrap) {
     float t10 = hfgi_bilinear(l, i + ivec2(1, -1), vec2(f1.x, f0.y), wrap);
     float t01 = hfgi_bilinear(l, i + ivec2(-1, 1), vec2(f0.x, f1.y), wrap);
     float t11 = hfgi_bilinear(l, i + ivec2(1, 1), vec2(f1.x, f1.y), wrap);
-    return g0.y * (g0.x * t00 + g1.x * t10) + g1.y * (g0.x * t01 + g1.x * t11);
+    return hfgi_bilerp(t00, t10, t01, t11, g1);
 }
 
 // Position in level l's texel units of a point given in texel units of a grid `from`

@@ -20,15 +20,37 @@ void hfgi_occlusion(float sigma, out float v[HFGI_N]) {
 
 // NLP vector of the indicator of elevations in [a, b] (zero if b <= a): v̄(b) − v̄(a).
 // With a = max(ω_max, lo) and b = hi this is eq. 11 restricted to a light's window (§6).
+// Computed from differences, not as hfgi_occlusion(b) − hfgi_occlusion(a): with
+// Δx = sin b − sin a = 2 cos((a+b)/2) sin((b−a)/2) and ΔP_l = P_l(sin b) − P_l(sin a) from the
+// difference of the Legendre recurrences,
+//     ΔP_0 = 0, ΔP_1 = Δx, ΔP_{l+1} = ((2l+1)(x_b ΔP_l + Δx P_l(x_a)) − l ΔP_{l−1}) / (l+1),
+// Δv̄_0 = Δx/√2 and Δv̄_l = √((2l+1)/2) (ΔP_{l+1} − ΔP_{l−1}) / (2l+1). Every term is
+// proportional to Δx, so a thin interval (the casting-set segments of nearly flat terrain,
+// ~1e-6 rad wide) keeps f32 precision relative to its own width instead of to 1
+// (docs/hard-cases.md: the two-sided form lost the whole indirect light of 1e-6-high terrain).
 void hfgi_interval(float a, float b, out float v[HFGI_N]) {
     if (b <= a) {
         for (int l = 0; l < HFGI_N; ++l) v[l] = 0.0;
         return;
     }
-    float va[HFGI_N];
-    hfgi_occlusion(a, va);
-    hfgi_occlusion(b, v);
-    for (int l = 0; l < HFGI_N; ++l) v[l] -= va[l];
+    float xa = sin(a);
+    float xb = sin(b);
+    float dx = 2.0 * cos(0.5 * (a + b)) * sin(0.5 * (b - a));
+    float dp_prev = 0.0; // ΔP_{l-1}
+    float dp = dx;       // ΔP_l
+    float pa_prev = 1.0; // P_{l-1}(x_a)
+    float pa = xa;       // P_l(x_a)
+    v[0] = dx * 0.70710678118654752;
+    for (int l = 1; l < HFGI_N; ++l) {
+        float k = float(2 * l + 1);
+        float dp_next = (k * (xb * dp + dx * pa) - float(l) * dp_prev) / float(l + 1);
+        float pa_next = (k * xa * pa - float(l) * pa_prev) / float(l + 1);
+        v[l] = sqrt(k * 0.5) * (dp_next - dp_prev) / k;
+        dp_prev = dp;
+        dp = dp_next;
+        pa_prev = pa;
+        pa = pa_next;
+    }
 }
 
 #endif

@@ -32,7 +32,7 @@ float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 
         float b = hfgi_stack_fetch(l.source, plane, i + ivec2(1, 0), work, wrap);
         float c = hfgi_stack_fetch(l.source, plane, i + ivec2(0, 1), work, wrap);
         float d = hfgi_stack_fetch(l.source, plane, i + ivec2(1, 1), work, wrap);
-        return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+        return hfgi_bilerp(a, b, c, d, f);
     }
     return hfgi_bspline_at(l, hfgi_rescale(p0, n0, l), wrap);
 }

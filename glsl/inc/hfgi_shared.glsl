@@ -7,11 +7,15 @@
 // One level of a pyramid inside its levels buffer (offset in floats, row-major). `source`
 // names the buffer: 0 = the height pyramid, 1 = the radiance pyramid (see HFGI_LEVEL_READ in
 // hfgi_filter.glsl); a pyramid of C channels has C·n_levels entries, channel c at c·n_levels.
+// `bias` is subtracted from every sample read (hfgi_fetch): the height origin z0 on level 0 of
+// a renderer's height pyramid, so that every filtered height is relative to z0 (docs/pyramid.md);
+// 0 elsewhere. 20 bytes (std430 array stride 20).
 struct hfgi_Level {
     uint width;
     uint height;
     uint offset;
     uint source;
+    float bias;
 };
 
 // Push constants of the pyramid passes (decimate, synthesize, probe). 16 bytes.
@@ -38,7 +42,7 @@ struct hfgi_VisibilityPush {
     uint pad1;
 };
 
-// Push constants of the direct shading pass. 96 bytes.
+// Push constants of the direct shading pass. 112 bytes.
 struct hfgi_ShadePush {
     uint width;         // full resolution
     uint height;
@@ -52,9 +56,10 @@ struct hfgi_ShadePush {
     uint accumulate;    // indirect mode: 1 adds this bounce to planes 2 and 5, 0 overwrites
     float pad1;
     float pad2;
-    vec4 camera;        // world position of the camera (xyz)
+    vec4 camera;        // world position of the camera (xyz), high part
     vec4 specular;      // Phong k_s (rgb)
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
+    vec4 camera_lo;     // low part: position = camera + camera_lo (f64 split in two f32)
 };
 
 // Push constants of the indirect scan (indirect.scan). 64 bytes.
@@ -86,13 +91,15 @@ struct hfgi_GatherPush {
     uint pad1;
 };
 
-// Push constants of the view raster pass (glsl/view/raster.vert.glsl). 80 bytes.
+// Push constants of the view raster pass (glsl/view/raster.vert.glsl). 112 bytes.
 struct hfgi_ViewPush {
-    mat4 view_proj;     // world → clip (Vulkan: y down, reversed depth 1 at near → 0 at far)
+    mat4 view_proj;     // eye-relative world → clip (Vulkan: y down, reversed depth 1 at near → 0 at far)
     uint width;         // height-field size (vertices per row)
     uint height;
     float texel_size;   // world units per texel
     uint pad;
+    vec4 eye;           // eye position, high part (xyz)
+    vec4 eye_lo;        // low part: eye = eye + eye_lo (an f64 position in two f32)
 };
 
 // Push constants of the water step (glsl/water/step.comp.glsl). 96 bytes.

@@ -123,7 +123,10 @@ void main() {
     vec3 glossy = vec3(0.0);
     if (pc.glossy != 0u) {
         vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
-        vec3 wo = normalize(pc.camera.xyz - P);
+        // (camera − P) + camera_lo: the high part cancels exactly against P near the surface,
+        // the low part restores the camera's f64 position (docs/hard-cases.md).
+        precise vec3 rel = (pc.camera.xyz - P) + pc.camera_lo.xyz;
+        vec3 wo = normalize(rel);
         vec3 R = 2.0 * dot(N, wo) * N - wo;
         hfgi_sh_eval(normalize(R));
         vec3 G = vec3(0.0);

@@ -18,5 +18,8 @@ void main() {
     uint t = j * pc.width + i;
     vec3 p = vec3(float(i) * pc.texel_size, float(j) * pc.texel_size, hfgi_heights[t]);
     hfgi_colour = hfgi_shading[t].rgb;
-    gl_Position = pc.view_proj * vec4(p, 1.0);
+    // Eye-relative ("relative to eye") transform: (p − eye) − eye_lo is exact to f32 of the
+    // result even when p is near 1e7, where p itself times a world → clip matrix would cancel.
+    precise vec3 rel = (p - pc.eye.xyz) - pc.eye_lo.xyz;
+    gl_Position = pc.view_proj * vec4(rel, 1.0);
 }

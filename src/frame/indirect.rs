@@ -230,6 +230,30 @@ impl IndirectPass {
         &self.buffers[U]
     }
 
+    /// Diagnostics: the IR vectors of the last bounce (receivers × `n²` × `vec4`), read back
+    /// (waits). Call after a recorded frame completed.
+    pub fn read_u(&self, ctx: &Context) -> Result<Vec<f32>> {
+        let b = &self.buffers[U];
+        memory::download_f32(ctx, b, 0, b.size / 4)
+    }
+
+    /// Diagnostics: the bounce buffer, the last bounce's diffuse and glossy exit radiance (two
+    /// `W × H` planes of `vec4`), read back (waits).
+    pub fn read_bounce(&self, ctx: &Context) -> Result<Vec<f32>> {
+        let b = &self.buffers[BOUNCE];
+        memory::download_f32(ctx, b, 0, b.size / 4)
+    }
+
+    /// Diagnostics: the last bounce's incident SH radiance per texel (vector pyramid only;
+    /// `None` otherwise), read back (waits).
+    pub fn read_incident(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
+        let b = &self.buffers[INCIDENT];
+        if b.size <= 16 {
+            return Ok(None);
+        }
+        memory::download_f32(ctx, b, 0, b.size / 4).map(Some)
+    }
+
     pub fn memory_bytes(&self) -> u64 {
         self.buffers.iter().map(|b| b.size).sum::<u64>() + self.radiance.memory_bytes()
     }

@@ -71,7 +71,7 @@ impl PyramidLayout {
                     "fewer than 2^32 samples in all levels",
                 ));
             }
-            levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, source: 0 });
+            levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, source: 0, bias: 0.0 });
             offset += (w * h) as u64;
         }
         Ok(Self { k_v, levels, total: offset })
@@ -110,12 +110,28 @@ impl PyramidKind {
     };
 }
 
+/// The level table of a pyramid: channel `c` of level `i` is entry `c·n_v + i`, level 0 of
+/// every channel with `bias = origin`.
+fn table_entries(layout: &PyramidLayout, kind: PyramidKind, origin: f32) -> Vec<GpuLevel> {
+    (0..kind.channels.max(1) as u64)
+        .flat_map(|c| {
+            layout.levels.iter().enumerate().map(move |(i, l)| GpuLevel {
+                offset: (c * layout.total) as u32 + l.offset,
+                source: kind.source,
+                bias: if i == 0 { origin } else { 0.0 },
+                ..*l
+            })
+        })
+        .collect()
+}
+
 /// The height pyramid pass and its buffers. The same pass builds the RGB radiance pyramid
 /// ([`PyramidKind`] with 3 channels): channel `c` of level `i` is table entry `c·n_v + i`, at
 /// float offset `c·total + offset_i`, and stack plane `c·n_v + i`.
 pub struct HeightPyramid {
     layout: PyramidLayout,
     kind: PyramidKind,
+    origin: f32,
     mode: PyramidMode,
     wrap: bool,
     work: (u32, u32),
@@ -158,15 +174,7 @@ impl HeightPyramid {
     ) -> Result<Self> {
         let layout = PyramidLayout::new(width, height, k_v)?;
         let channels = kind.channels.max(1) as u64;
-        let table_entries: Vec<GpuLevel> = (0..channels)
-            .flat_map(|c| {
-                layout.levels.iter().map(move |l| GpuLevel {
-                    offset: (c * layout.total) as u32 + l.offset,
-                    source: kind.source,
-                    ..*l
-                })
-            })
-            .collect();
+        let table_entries = table_entries(&layout, kind, 0.0);
         if channels * layout.total > u32::MAX as u64 {
             return Err(Error::param(
                 "pyramid size",
@@ -211,7 +219,7 @@ impl HeightPyramid {
             let tb = table.insert(Buffer::new(
                 ctx,
                 &format!("hfgi.{}.table", kind.label),
-                (table_entries.len() * 16) as u64,
+                (table_entries.len() * std::mem::size_of::<GpuLevel>()) as u64,
                 storage,
                 MemoryLocation::GpuOnly,
             )?);
@@ -249,6 +257,7 @@ impl HeightPyramid {
             (Ok(()), Some(levels), Some(table), Some(decimate)) => Ok(Self {
                 layout,
                 kind,
+                origin: 0.0,
                 mode,
                 wrap,
                 work: (work.0 as u32, work.1 as u32),
@@ -284,6 +293,26 @@ impl HeightPyramid {
             ));
         }
         memory::upload_f32(ctx, &self.levels, 0, field.data())
+    }
+
+    /// Sets the origin `z0`: level 0 (every channel) is read as `value − z0`, so every other
+    /// level, the stack and every lookup hold values relative to `z0` while level 0 keeps what
+    /// the caller wrote (docs/pyramid.md, "Origin"). Uploads the level table (waits); takes
+    /// effect at the next [`HeightPyramid::record`]. A renderer sets the midrange of its heights
+    /// ([`crate::frame::renderer::height_origin`]); the default is 0.
+    pub fn set_origin(&mut self, ctx: &Context, origin: f32) -> Result<()> {
+        if !origin.is_finite() {
+            return Err(Error::param("pyramid origin", origin, "a finite height"));
+        }
+        let entries = table_entries(&self.layout, self.kind, origin);
+        memory::upload(ctx, &self.table, 0, bytemuck::cast_slice(&entries))?;
+        self.origin = origin;
+        Ok(())
+    }
+
+    /// The origin `z0` subtracted from level 0 on every read ([`HeightPyramid::set_origin`]).
+    pub fn origin(&self) -> f32 {
+        self.origin
     }
 
     /// Records the decimation (and, in stack mode, the synthesis) into `rec`'s command buffer.
@@ -368,14 +397,15 @@ impl HeightPyramid {
         self.levels.size + self.table.size + self.stack.as_ref().map_or(0, |s| s.size)
     }
 
-    /// Reads level `i` back (waits). For tests and pictures.
+    /// Reads level `i` back (waits). For tests and pictures. Level 0 holds what was written
+    /// (absolute heights); levels ≥ 1 hold values relative to [`HeightPyramid::origin`].
     pub fn read_level(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
         let l =
             *self.layout.levels.get(i).ok_or_else(|| Error::param("level", i, format!("< {}", self.layout.count())))?;
         memory::download_f32(ctx, &self.levels, l.offset as u64, (l.width * l.height) as u64)
     }
 
-    /// Reads stack plane `i` back (waits). Stack mode only.
+    /// Reads stack plane `i` back (waits; relative to [`HeightPyramid::origin`]). Stack mode only.
     pub fn read_stack(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
         let s = self.stack.as_ref().ok_or_else(|| Error::param("read_stack", "pyramid mode", "stack mode"))?;
         if i >= self.layout.count() {
@@ -385,8 +415,21 @@ impl HeightPyramid {
         memory::download_f32(ctx, s, i as u64 * plane, plane)
     }
 
+    /// Diagnostics: the whole levels buffer (every channel, [`PyramidLayout`] order; channel
+    /// `c` starts at float `c·total`), read back (waits). Call after a recorded frame completed.
+    pub fn read_levels_all(&self, ctx: &Context) -> Result<Vec<f32>> {
+        memory::download_f32(ctx, &self.levels, 0, self.levels.size / 4)
+    }
+
+    /// Diagnostics: the whole stack buffer (`channels · n_v` planes of `work()` size), read back
+    /// (waits); `None` in pyramid mode. Call after a recorded frame completed.
+    pub fn read_stack_all(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
+        self.stack.as_ref().map(|s| memory::download_f32(ctx, s, 0, s.size / 4)).transpose()
+    }
+
     /// Samples the pyramid at `(level, x, y)` queries (x, y in level-0 texel units) on the GPU
-    /// exactly as the scanning passes do: bilinear on the stack, or B-spline on the fly.
+    /// exactly as the scanning passes do: bilinear on the stack, or B-spline on the fly. The
+    /// values are relative to [`HeightPyramid::origin`] (absolute with the default origin 0).
     pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
         let q: Vec<[f32; 4]> = queries.iter().map(|q| [q[0], q[1], q[2], 0.0]).collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER

@@ -58,8 +58,11 @@ impl Renderer {
         scene.gi.validate()?;
         let (w, h) = (scene.field.width(), scene.field.height());
         let work = scene.gi.working_size(w, h);
-        let pyramid = HeightPyramid::new(ctx, w, h, work, scene.gi.level_step, scene.gi.pyramid, scene.wrap)?;
-        let r = pyramid.upload(ctx, &scene.field).and_then(|_| VisibilityPass::new(ctx, &pyramid, scene));
+        let mut pyramid = HeightPyramid::new(ctx, w, h, work, scene.gi.level_step, scene.gi.pyramid, scene.wrap)?;
+        let r = pyramid
+            .upload(ctx, &scene.field)
+            .and_then(|_| pyramid.set_origin(ctx, height_origin(&scene.field)))
+            .and_then(|_| VisibilityPass::new(ctx, &pyramid, scene));
         let visibility = match r {
             Ok(v) => v,
             Err(e) => {
@@ -155,8 +158,17 @@ impl Renderer {
             ));
         }
         self.pyramid.upload(ctx, field)?;
+        self.pyramid.set_origin(ctx, height_origin(field))?;
         self.heights_changed = true;
         Ok(())
+    }
+
+    /// The height origin `z0` the pyramid subtracts from the heights it reads (docs/pyramid.md,
+    /// "Origin"): the midrange of the field given to [`Renderer::new`] or the last
+    /// [`Renderer::update_heights`]. Heights written on the GPU keep the last one; the heights
+    /// buffer always holds absolute heights.
+    pub fn height_origin(&self) -> f32 {
+        self.pyramid.origin()
     }
 
     /// The full-resolution heights the frame reads: `f32`, row-major `W × H` from offset 0 of
@@ -244,6 +256,60 @@ impl Renderer {
         })
     }
 
+    /// Diagnostics: every intermediate GPU buffer of the frame, read back as `f32` (waits), in
+    /// pipeline order, each with a name:
+    ///
+    /// - `pyramid.level{i}` (level `i` of the height pyramid, `W_i × H_i`) and, in stack mode,
+    ///   `pyramid.stack{i}` (plane `i` at the working resolution);
+    /// - `visibility.v.{set}` (`set` = `environment` or `key{k}`): receivers × `n²`;
+    /// - `shade.{plane}` for the six planes of the shading buffer (`total`, `direct`,
+    ///   `indirect`, `glossy`, `glossy_direct`, `glossy_indirect`), raw `vec4`s (w = 1), and
+    ///   `shade.incident` (`T` per texel) with the glossy vector pyramid;
+    /// - with indirect light: `radiance.levels` (every channel), `radiance.stack` (stack mode),
+    ///   `indirect.u` (the last bounce's `U`), `indirect.bounce` (its diffuse and glossy exit
+    ///   radiance) and, with the vector pyramid, `indirect.incident`.
+    ///
+    /// Call after a recorded frame has completed (before it, buffers that no frame wrote yet
+    /// hold undefined values). For tests and debugging; not part of a frame.
+    pub fn debug_buffers(&self, ctx: &Context) -> Result<Vec<(String, Vec<f32>)>> {
+        use super::visibility::SetKind;
+        let mut out = Vec::new();
+        for i in 0..self.pyramid.layout().count() {
+            out.push((format!("pyramid.level{i}"), self.pyramid.read_level(ctx, i)?));
+        }
+        if self.pyramid.stack_buffer().is_some() {
+            for i in 0..self.pyramid.layout().count() {
+                out.push((format!("pyramid.stack{i}"), self.pyramid.read_stack(ctx, i)?));
+            }
+        }
+        for (i, kind) in self.visibility.set_kinds().into_iter().enumerate() {
+            let name = match kind {
+                SetKind::Environment => "visibility.v.environment".to_string(),
+                SetKind::KeyLight(k) => format!("visibility.v.key{k}"),
+            };
+            out.push((name, self.visibility.read(ctx, i)?));
+        }
+        let planes = ["total", "direct", "indirect", "glossy", "glossy_direct", "glossy_indirect"];
+        for (p, name) in planes.iter().enumerate() {
+            out.push((format!("shade.{name}"), self.shade.read_plane(ctx, p)?));
+        }
+        if let Some(t) = self.shade.read_incident(ctx)? {
+            out.push(("shade.incident".to_string(), t));
+        }
+        if let Some(ind) = &self.indirect {
+            out.push(("radiance.levels".to_string(), ind.radiance.pyramid.read_levels_all(ctx)?));
+            if let Some(st) = ind.radiance.pyramid.read_stack_all(ctx)? {
+                out.push(("radiance.stack".to_string(), st));
+            }
+            out.push(("indirect.u".to_string(), ind.read_u(ctx)?));
+            out.push(("indirect.bounce".to_string(), ind.read_bounce(ctx)?));
+            if let Some(t) = ind.read_incident(ctx)? {
+                out.push(("indirect.incident".to_string(), t));
+            }
+        }
+        Ok(out)
+    }
+
     /// GPU memory held by all passes, in bytes.
     pub fn memory_bytes(&self) -> u64 {
         self.pyramid.memory_bytes()
@@ -260,6 +326,16 @@ impl Renderer {
         self.visibility.destroy(ctx);
         self.pyramid.destroy(ctx);
     }
+}
+
+/// The height origin `z0` of a field (docs/pyramid.md, "Origin"): the midrange of its heights,
+/// computed in f64 and rounded to f32. Level 0 is read relative to it, so every filtered height
+/// keeps f32 precision relative to the field's relief rather than to its distance from 0
+/// (a plateau at 1e4 or 1e7). Shading is invariant under a z-translation: the CPU twin
+/// ([`crate::reference::direct::render_direct`]) uses the same origin.
+pub fn height_origin(field: &HeightField) -> f32 {
+    let (lo, hi) = field.range();
+    ((lo as f64 + hi as f64) / 2.0) as f32
 }
 
 /// Whether the scene has indirect light to compute: bounces > 0 and a surface that reflects

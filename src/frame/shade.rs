@@ -191,7 +191,11 @@ impl ShadePass {
         let incident = bufs.pop().expect("incident");
         let output = bufs.pop().expect("output");
         let (ww, wh) = pyramid.work();
-        let cam = scene.camera.position;
+        // The camera position as a high and a low f32 (docs/hard-cases.md): the shader forms
+        // (camera − P) + camera_lo, exact to f32 of the result even for heights near 1e7.
+        let cam = scene.camera.position.to_array();
+        let cam_hi = cam.map(|v| v as f32);
+        let cam_lo = [0, 1, 2].map(|i| (cam[i] - cam_hi[i] as f64) as f32);
         let (albedo_map, albedo) = match &scene.material.albedo {
             Albedo::Map(_) => (1, [0.0; 4]),
             Albedo::Constant(a) => (0, [a[0], a[1], a[2], 0.0]),
@@ -209,9 +213,10 @@ impl ShadePass {
             texel_size: scene.texel_size as f32,
             accumulate: 0,
             pad: [0.0; 2],
-            camera: [cam.x as f32, cam.y as f32, cam.z as f32, 0.0],
+            camera: [cam_hi[0], cam_hi[1], cam_hi[2], 0.0],
             specular: [spec[0], spec[1], spec[2], 0.0],
             albedo,
+            camera_lo: [cam_lo[0], cam_lo[1], cam_lo[2], 0.0],
         };
         Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push })
     }
@@ -251,6 +256,25 @@ impl ShadePass {
         let plane = (self.push.width * self.push.height) as u64;
         let v = memory::download_f32(ctx, &self.output, layer as u64 * plane * 4, plane * 4)?;
         Ok(v.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    /// Diagnostics: plane `plane` (< [`PLANES`]) of the shading buffer as raw `vec4`s (rgb and
+    /// the constant 1 in w), read back (waits).
+    pub fn read_plane(&self, ctx: &Context, plane: usize) -> Result<Vec<f32>> {
+        if plane >= PLANES {
+            return Err(crate::error::Error::param("shading plane", plane, format!("< {PLANES}")));
+        }
+        let texels = (self.push.width * self.push.height) as u64;
+        memory::download_f32(ctx, &self.output, plane as u64 * texels * 4, texels * 4)
+    }
+
+    /// Diagnostics: the incident SH radiance `T` of the direct light (`W·H·n²` `vec4`s), read
+    /// back (waits); `None` unless the glossy vector pyramid stores it.
+    pub fn read_incident(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
+        if self.incident.size <= 16 {
+            return Ok(None);
+        }
+        memory::download_f32(ctx, &self.incident, 0, self.incident.size / 4).map(Some)
     }
 
     pub fn memory_bytes(&self) -> u64 {

@@ -5,13 +5,17 @@ use bytemuck::{Pod, Zeroable};
 
 /// `hfgi_Level`: one pyramid level inside the levels buffer (offset in floats).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLevel {
     pub width: u32,
     pub height: u32,
     pub offset: u32,
     /// Buffer the level lives in: 0 heights, 1 radiance (`hfgi_Level.source`).
     pub source: u32,
+    /// Subtracted from every sample read from this level (`hfgi_fetch`): the height origin
+    /// `z0` on level 0 of a renderer's height pyramid ([`crate::frame::pyramid::HeightPyramid::set_origin`],
+    /// docs/pyramid.md), 0 everywhere else.
+    pub bias: f32,
 }
 
 /// `hfgi_PyramidPush`: push constants of the pyramid passes.
@@ -58,9 +62,14 @@ pub struct ShadePush {
     /// Indirect mode: 1 adds the bounce to the indirect planes, 0 overwrites them.
     pub accumulate: u32,
     pub pad: [f32; 2],
+    /// Camera position, split as `camera + camera_lo` (two f32 per coordinate, the f64
+    /// position to ~48 bits) so that the view vector `(camera − P) + camera_lo` keeps its
+    /// precision when the heights are far from 0 (docs/hard-cases.md).
     pub camera: [f32; 4],
     pub specular: [f32; 4],
     pub albedo: [f32; 4],
+    /// The low part of the camera position (see `camera`).
+    pub camera_lo: [f32; 4],
 }
 
 /// `hfgi_IndirectPush`: push constants of the indirect scan (`indirect.scan`).
@@ -108,12 +117,17 @@ const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct ViewPush {
-    /// World → clip, column-major (`mat4`).
+    /// Eye-relative world → clip, column-major (`mat4`): the view-projection with the eye at the
+    /// origin. The vertex shader applies it to `(P − eye) − eye_lo` (docs/view.md).
     pub view_proj: [[f32; 4]; 4],
     pub width: u32,
     pub height: u32,
     pub texel_size: f32,
     pub pad: u32,
+    /// The eye position as a high and a low f32 (`eye + eye_lo` = the f64 position), so that
+    /// vertices far from 0 (heights near 1e7) keep their precision relative to the eye.
+    pub eye: [f32; 4],
+    pub eye_lo: [f32; 4],
 }
 
 /// `hfgi_WaterPush`: push constants of the water step (`docs/dynamic.md`).
@@ -154,9 +168,9 @@ pub struct TruthPush {
 }
 
 const _: () = assert!(std::mem::size_of::<TruthPush>() == 48);
-const _: () = assert!(std::mem::size_of::<GpuLevel>() == 16);
+const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);
-const _: () = assert!(std::mem::size_of::<ShadePush>() == 96);
+const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
-const _: () = assert!(std::mem::size_of::<ViewPush>() == 80);
+const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);

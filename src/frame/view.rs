@@ -202,6 +202,15 @@ impl CameraModel {
         self.projection() * self.view()
     }
 
+    /// Eye-relative world → clip: maps `P − eye` to clip space (`view_projection()` with the eye
+    /// at the origin). The GPU uses this form so that its f32 arithmetic never holds absolute
+    /// world coordinates times the matrix (docs/view.md).
+    pub fn eye_relative_view_projection(&self) -> DMat4 {
+        let mut rotation = self.view();
+        rotation.w_axis = DVec4::W;
+        self.projection() * rotation
+    }
+
     /// The world-space ray through pixel position `(px, py)` (pixel centres at `+0.5`; row 0 is
     /// the top of the image): origin and unit direction.
     pub fn ray(&self, px: f64, py: f64) -> (DVec3, DVec3) {
@@ -388,13 +397,18 @@ impl ViewPass {
     }
 
     fn update_push(&mut self) {
-        let vp = self.model.view_projection().as_mat4();
+        let vp = self.model.eye_relative_view_projection().as_mat4();
+        let eye = self.model.eye.to_array();
+        let hi = eye.map(|v| v as f32);
+        let lo = [0, 1, 2].map(|i| (eye[i] - hi[i] as f64) as f32);
         self.push = ViewPush {
             view_proj: vp.to_cols_array_2d(),
             width: self.field.0 as u32,
             height: self.field.1 as u32,
             texel_size: self.texel_size as f32,
             pad: 0,
+            eye: [hi[0], hi[1], hi[2], 0.0],
+            eye_lo: [lo[0], lo[1], lo[2], 0.0],
         };
     }
 

@@ -207,7 +207,10 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
     let n = gi.sh_order;
     let (w, h) = (scene.field.width(), scene.field.height());
     let work = gi.working_size(w, h);
-    let pyr = CpuPyramid::build(&scene.field, work, gi.level_step, scene.wrap, gi.pyramid == PyramidMode::Stack)?;
+    // Heights relative to the renderer's origin z0 (docs/pyramid.md, "Origin").
+    let z0 = crate::frame::renderer::height_origin(&scene.field);
+    let stack = gi.pyramid == PyramidMode::Stack;
+    let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let scan =
         Scan { pyr: &pyr, k_v: gi.level_step, o_v: gi.level_offset, texel_size: scene.texel_size, wrap: scene.wrap };
     let sets = light_sets(scene);

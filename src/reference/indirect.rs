@@ -155,7 +155,8 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let (w, h) = (scene.field.width(), scene.field.height());
     let work = direct.work;
     let stack = gi.pyramid == PyramidMode::Stack;
-    let pyr = CpuPyramid::build(&scene.field, work, gi.level_step, scene.wrap, stack)?;
+    let z0 = crate::frame::renderer::height_origin(&scene.field);
+    let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let scan =
         Scan { pyr: &pyr, k_v: gi.level_step, o_v: gi.level_offset, texel_size: scene.texel_size, wrap: scene.wrap };
     let set = environment_set(gi.azimuths as usize, gi.interpolation);

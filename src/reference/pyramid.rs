@@ -32,29 +32,35 @@ fn texel(data: &[f64], w: usize, h: usize, x: i64, y: i64, wrap: bool) -> f64 {
     data[address(y, h, wrap) * w + address(x, w, wrap)]
 }
 
-/// Bilinear interpolation at `(x, y)` in texel units (centres at integers).
+/// Bilinear interpolation at `(x, y)` in texel units (centres at integers), separably and in
+/// base-relative form `a + t·(b − a)` like the GPU's `hfgi_bilerp` (docs/hard-cases.md): equal
+/// texels give exactly their value, rounding is relative to the local differences.
 pub fn bilinear(data: &[f64], w: usize, h: usize, x: f64, y: f64, wrap: bool) -> f64 {
     let (fx, fy) = (x.floor(), y.floor());
     let (tx, ty) = (x - fx, y - fy);
     let (ix, iy) = (fx as i64, fy as i64);
     let t = |dx, dy| texel(data, w, h, ix + dx, iy + dy, wrap);
-    let top = t(0, 0) * (1.0 - tx) + t(1, 0) * tx;
-    let bottom = t(0, 1) * (1.0 - tx) + t(1, 1) * tx;
-    top * (1.0 - ty) + bottom * ty
+    let lerp = |a: f64, b: f64, t: f64| a + t * (b - a);
+    let top = lerp(t(0, 0), t(1, 0), tx);
+    let bottom = lerp(t(0, 1), t(1, 1), tx);
+    lerp(top, bottom, ty)
 }
 
-/// Uniform cubic B-spline at `(x, y)`: `Σ_{a,b} β_a(tx) β_b(ty) H[iy−1+b][ix−1+a]`.
+/// Uniform cubic B-spline at `(x, y)`: `Σ_{a,b} β_a(tx) β_b(ty) H[iy−1+b][ix−1+a]`, summed as
+/// `H[iy][ix] + Σ β_a β_b (H[…] − H[iy][ix])` (the weights sum to 1), so that a constant
+/// neighbourhood is reproduced exactly whatever its magnitude (docs/hard-cases.md).
 pub fn bspline(data: &[f64], w: usize, h: usize, x: f64, y: f64, wrap: bool) -> f64 {
     let (fx, fy) = (x.floor(), y.floor());
     let (wx, wy) = (bspline::weights(x - fx), bspline::weights(y - fy));
     let (ix, iy) = (fx as i64, fy as i64);
+    let base = texel(data, w, h, ix, iy, wrap);
     let mut sum = 0.0;
     for (b, wyb) in wy.iter().enumerate() {
         for (a, wxa) in wx.iter().enumerate() {
-            sum += wyb * wxa * texel(data, w, h, ix - 1 + a as i64, iy - 1 + b as i64, wrap);
+            sum += wyb * wxa * (texel(data, w, h, ix - 1 + a as i64, iy - 1 + b as i64, wrap) - base);
         }
     }
-    sum
+    base + sum
 }
 
 /// Maps a coordinate on a grid `from` cells wide to a grid `to` cells wide (texel centres,
@@ -67,6 +73,21 @@ impl CpuPyramid {
     /// Builds every level; with `synthesize`, also the stack at working resolution `work`.
     pub fn build(field: &HeightField, work: (usize, usize), k_v: u32, wrap: bool, synthesize: bool) -> Result<Self> {
         let data: Vec<f64> = field.data().iter().map(|&v| v as f64).collect();
+        Self::build_f64(data, (field.width(), field.height()), work, k_v, wrap, synthesize)
+    }
+
+    /// [`CpuPyramid::build`] of the heights relative to `origin` (`h − z0` in f64), the twin of a
+    /// GPU pyramid with [`crate::frame::pyramid::HeightPyramid::set_origin`]: every level and
+    /// lookup is relative to `origin`.
+    pub fn build_relative(
+        field: &HeightField,
+        origin: f32,
+        work: (usize, usize),
+        k_v: u32,
+        wrap: bool,
+        synthesize: bool,
+    ) -> Result<Self> {
+        let data: Vec<f64> = field.data().iter().map(|&v| v as f64 - origin as f64).collect();
         Self::build_f64(data, (field.width(), field.height()), work, k_v, wrap, synthesize)
     }
 
