@@ -154,7 +154,8 @@ fn reference_writes_the_layers_and_matches_the_cpu_version() {
     let (g, c) = (read(&gpu), read(&cpu));
     for layer in ["", "direct", "indirect", "glossy"] {
         for chan in ["R", "G", "B"] {
-            let find = |v: &[hfgi::io::exr::ExrChannel]| v.iter().find(|(l, n, _)| l == layer && n == chan).unwrap().2.clone();
+            let find =
+                |v: &[hfgi::io::exr::ExrChannel]| v.iter().find(|(l, n, _)| l == layer && n == chan).unwrap().2.clone();
             let (a, b) = (find(&g), find(&c));
             let (num, den) = a.iter().zip(&b).fold((0.0f64, 0.0f64), |(n, d), (x, y)| {
                 (n + (*x as f64 - *y as f64).powi(2), d + (*y as f64).powi(2))

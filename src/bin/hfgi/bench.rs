@@ -215,7 +215,10 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let lavapipe = info.kind == ash::vk::PhysicalDeviceType::CPU;
     let clock = if lavapipe { "lavapipe (CPU time, not a GPU time)" } else { "GPU timestamps" };
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    eprintln!("bench on {} ({}), {}×{} fields, {} timed frames per configuration", info.name, info.driver, a.size, a.size, a.frames);
+    eprintln!(
+        "bench on {} ({}), {}×{} fields, {} timed frames per configuration",
+        info.name, info.driver, a.size, a.size, a.frames
+    );
     let mut rows: Vec<Row> = Vec::new();
     let mut references: Vec<(String, Option<f64>, Option<f64>)> = Vec::new();
     for path in &a.scenes {
@@ -308,10 +311,20 @@ fn write_outputs(
 
     // Markdown: per scene, the table; the reference times; the m × k grid.
     let mut md = String::new();
-    let _ = writeln!(md, "Device: {} ({}), times: {clock}, field {}², {} timed frames (median) after 1 warm-up.\n", info.name, info.driver, a.size, a.frames);
+    let _ = writeln!(
+        md,
+        "Device: {} ({}), times: {clock}, field {}², {} timed frames (median) after 1 warm-up.\n",
+        info.name, info.driver, a.size, a.frames
+    );
     for (scene, ex, sv) in references {
         let t = |v: &Option<f64>| v.map_or("no timestamps".into(), |ms| format!("{ms:.1} ms"));
-        let _ = writeln!(md, "### {scene}\n\nBrute-force reference: exact {}, SH-visibility {} ({}).\n", t(ex), t(sv), clock);
+        let _ = writeln!(
+            md,
+            "### {scene}\n\nBrute-force reference: exact {}, SH-visibility {} ({}).\n",
+            t(ex),
+            t(sv),
+            clock
+        );
         let _ = writeln!(
             md,
             "| knob | settings | time (ms) | speed-up vs exact reference | memory (MiB) | err exact: direct / indirect / total | err SH-vis: direct / indirect / total |\n|---|---|---|---|---|---|---|"
