@@ -51,6 +51,17 @@ vec2 gradient(ivec2 t, bool wrap) {
     return vec2(hx / (float(b.x - a.x) * pc.texel_size), hy / (float(b.y - a.y) * pc.texel_size));
 }
 
+// Normal at level-0 position q: the gradients of the four surrounding texels, bilinear, then
+// normalised (docs/indirect.md §2; the receiver's and, in vector mode, a casting point's).
+vec3 normal_at(vec2 q, bool wrap) {
+    vec2 fl = floor(q);
+    vec2 f = q - fl;
+    ivec2 b = ivec2(fl);
+    vec2 g = (1.0 - f.x) * (1.0 - f.y) * gradient(b, wrap) + f.x * (1.0 - f.y) * gradient(b + ivec2(1, 0), wrap)
+           + (1.0 - f.x) * f.y * gradient(b + ivec2(0, 1), wrap) + f.x * f.y * gradient(b + ivec2(1, 1), wrap);
+    return normalize(vec3(-g, 1.0));
+}
+
 // Exit radiance of casting point q toward the receiver (docs/indirect.md §2): the diffuse RGB
 // pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
 // direction back to the receiver about q's normal.
@@ -63,12 +74,7 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stac
         rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, stack_mode, wrap);
     }
     if (HFGI_VECTOR != 0) {
-        vec2 fl = floor(q);
-        vec2 f = q - fl;
-        ivec2 b = ivec2(fl);
-        vec2 g = (1.0 - f.x) * (1.0 - f.y) * gradient(b, wrap) + f.x * (1.0 - f.y) * gradient(b + ivec2(1, 0), wrap)
-               + (1.0 - f.x) * f.y * gradient(b + ivec2(0, 1), wrap) + f.x * f.y * gradient(b + ivec2(1, 1), wrap);
-        vec3 nc = normalize(vec3(-g, 1.0));
+        vec3 nc = normal_at(q, wrap);
         vec3 s = -vec3(cos(omega) * d, sin(omega));
         hfgi_sh_eval(normalize(2.0 * dot(nc, s) * nc - s));
         vec3 gl = vec3(0.0);
@@ -99,13 +105,7 @@ void main() {
     vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5; // receiver in level-0 texels
     float big_n = max(n0.x, n0.y);
 
-    // Receiver normal: gradients of the four surrounding texels, bilinear (docs/indirect.md §2).
-    vec2 fl = floor(p);
-    vec2 f = p - fl;
-    ivec2 b = ivec2(fl);
-    vec2 g = (1.0 - f.x) * (1.0 - f.y) * gradient(b, wrap) + f.x * (1.0 - f.y) * gradient(b + ivec2(1, 0), wrap)
-           + (1.0 - f.x) * f.y * gradient(b + ivec2(0, 1), wrap) + f.x * f.y * gradient(b + ivec2(1, 1), wrap);
-    vec3 N = normalize(vec3(-g, 1.0));
+    vec3 N = normal_at(p, wrap);
 
     for (int i = 0; i < HFGI_NV; ++i) hfgi_base[i] = hfgi_height_at(hfgi_scan_level(i, pc.level_bias), p, work, stack_mode, wrap);
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);

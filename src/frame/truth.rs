@@ -171,16 +171,7 @@ pub fn render_truth_gpu_timed(
             source = b.clone();
             indirect_bounces.push(b);
         }
-        let mut indirect = vec![[0.0; 3]; w * h];
-        for b in &indirect_bounces {
-            for (o, v) in indirect.iter_mut().zip(b) {
-                for c in 0..3 {
-                    o[c] += v[c];
-                }
-            }
-        }
-        let total = direct.iter().zip(&indirect).map(|(d, i)| [d[0] + i[0], d[1] + i[1], d[2] + i[2]]).collect();
-        Ok(TruthOutput { width: w, height: h, direct, indirect_bounces, indirect, total })
+        Ok(TruthOutput::assemble(w, h, direct, indirect_bounces))
     })();
     if let Some(mut p) = pipe {
         p.destroy(ctx);

@@ -302,14 +302,22 @@ pub fn render_truth(
         source = out.clone();
         indirect_bounces.push(out);
     }
-    let mut indirect = vec![[0.0; 3]; w * h];
-    for b in &indirect_bounces {
-        for (o, v) in indirect.iter_mut().zip(b) {
-            for c in 0..3 {
-                o[c] += v[c];
+    Ok(TruthOutput::assemble(w, h, direct, indirect_bounces))
+}
+
+impl TruthOutput {
+    /// The exported layers from the direct light and the bounces: `indirect = Σ_b`,
+    /// `total = direct + indirect`.
+    pub fn assemble(width: usize, height: usize, direct: Vec<[f64; 3]>, indirect_bounces: Vec<Vec<[f64; 3]>>) -> Self {
+        let mut indirect = vec![[0.0; 3]; width * height];
+        for b in &indirect_bounces {
+            for (o, v) in indirect.iter_mut().zip(b) {
+                for c in 0..3 {
+                    o[c] += v[c];
+                }
             }
         }
+        let total = direct.iter().zip(&indirect).map(|(d, i)| [d[0] + i[0], d[1] + i[1], d[2] + i[2]]).collect();
+        Self { width, height, direct, indirect_bounces, indirect, total }
     }
-    let total = direct.iter().zip(&indirect).map(|(d, i)| [d[0] + i[0], d[1] + i[1], d[2] + i[2]]).collect();
-    Ok(TruthOutput { width: w, height: h, direct, indirect_bounces, indirect, total })
 }
