@@ -6,7 +6,7 @@
 
 use ash::vk;
 
-use super::pipeline::{allocate_set, Bind, DescriptorKind};
+use super::pipeline::{allocate_set, destroy_objects, Bind, DescriptorKind};
 use super::{Buffer, Context, Image};
 use crate::error::{Error, Result, VkCall};
 use crate::shaders::Spirv;
@@ -213,25 +213,7 @@ impl GraphicsPipeline {
 
     /// Destroys the pipeline, its layouts and its descriptor pool (and so its sets).
     pub fn destroy(&mut self, ctx: &Context) {
-        let d = ctx.device();
-        unsafe {
-            if self.pool != vk::DescriptorPool::null() {
-                d.destroy_descriptor_pool(self.pool, None);
-            }
-            if self.pipeline != vk::Pipeline::null() {
-                d.destroy_pipeline(self.pipeline, None);
-            }
-            if self.layout != vk::PipelineLayout::null() {
-                d.destroy_pipeline_layout(self.layout, None);
-            }
-            if self.set_layout != vk::DescriptorSetLayout::null() {
-                d.destroy_descriptor_set_layout(self.set_layout, None);
-            }
-        }
-        self.pool = vk::DescriptorPool::null();
-        self.pipeline = vk::Pipeline::null();
-        self.layout = vk::PipelineLayout::null();
-        self.set_layout = vk::DescriptorSetLayout::null();
+        destroy_objects(ctx, &mut self.pool, &mut self.pipeline, &mut self.layout, &mut self.set_layout);
     }
 }
 

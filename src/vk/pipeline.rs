@@ -162,26 +162,38 @@ impl ComputePipeline {
 
     /// Destroys the pipeline, its layouts and its descriptor pool (and so its sets).
     pub fn destroy(&mut self, ctx: &Context) {
-        let d = ctx.device();
-        unsafe {
-            if self.pool != vk::DescriptorPool::null() {
-                d.destroy_descriptor_pool(self.pool, None);
-            }
-            if self.pipeline != vk::Pipeline::null() {
-                d.destroy_pipeline(self.pipeline, None);
-            }
-            if self.layout != vk::PipelineLayout::null() {
-                d.destroy_pipeline_layout(self.layout, None);
-            }
-            if self.set_layout != vk::DescriptorSetLayout::null() {
-                d.destroy_descriptor_set_layout(self.set_layout, None);
-            }
-        }
-        self.pool = vk::DescriptorPool::null();
-        self.pipeline = vk::Pipeline::null();
-        self.layout = vk::PipelineLayout::null();
-        self.set_layout = vk::DescriptorSetLayout::null();
+        destroy_objects(ctx, &mut self.pool, &mut self.pipeline, &mut self.layout, &mut self.set_layout);
     }
+}
+
+/// Destroys a pipeline's descriptor pool (and so its sets), pipeline and layouts, skipping null
+/// handles, and nulls them (shared by compute and graphics pipelines).
+pub(crate) fn destroy_objects(
+    ctx: &Context,
+    pool: &mut vk::DescriptorPool,
+    pipeline: &mut vk::Pipeline,
+    layout: &mut vk::PipelineLayout,
+    set_layout: &mut vk::DescriptorSetLayout,
+) {
+    let d = ctx.device();
+    unsafe {
+        if *pool != vk::DescriptorPool::null() {
+            d.destroy_descriptor_pool(*pool, None);
+        }
+        if *pipeline != vk::Pipeline::null() {
+            d.destroy_pipeline(*pipeline, None);
+        }
+        if *layout != vk::PipelineLayout::null() {
+            d.destroy_pipeline_layout(*layout, None);
+        }
+        if *set_layout != vk::DescriptorSetLayout::null() {
+            d.destroy_descriptor_set_layout(*set_layout, None);
+        }
+    }
+    *pool = vk::DescriptorPool::null();
+    *pipeline = vk::Pipeline::null();
+    *layout = vk::PipelineLayout::null();
+    *set_layout = vk::DescriptorSetLayout::null();
 }
 
 /// Workgroup count covering `n` items with groups of `size`.
