@@ -48,4 +48,43 @@ uint hfgi_scan_level(int i, uint bias) {
     return uint(max(i - int(bias), 0));
 }
 
+// The horizon scan of docs/direct.md §1–2 (eq. 14–16), shared by the visibility and the indirect
+// passes: the receiver of grid cell r and, per azimuth, its samples.
+struct hfgi_Scan {
+    vec2 p;           // receiver, level-0 texels (§1)
+    vec2 n0;          // level-0 size
+    uvec2 work;       // receiver grid
+    uint level_step;  // k
+    uint level_bias;  // k·o
+    float texel_size;
+    bool stack_mode;
+    bool wrap;
+};
+
+hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias, float texel_size, bool stack_mode,
+                          bool wrap) {
+    hfgi_Level l0 = hfgi_table[0];
+    vec2 n0 = vec2(float(l0.width), float(l0.height));
+    vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5;
+    return hfgi_Scan(p, n0, work, level_step, level_bias, texel_size, stack_mode, wrap);
+}
+
+// The receiver's height at the level read by sample i (eq. 15 compares f_L(q) with f_L(p)).
+float hfgi_scan_base(hfgi_Scan s, int i) {
+    return hfgi_height_at(hfgi_scan_level(i, s.level_bias), s.p, s.work, s.stack_mode, s.wrap);
+}
+
+// Sample i of n_v along direction d: t_i = N·2^(−(n_v−1−i)/k) texels, q = p + t_i·d, level
+// max(i − k·o, 0), blocking angle ω_i. False once q has left the domain (no wrap), with a 1e-3
+// texel tolerance so that rays along the border do not depend on rounding (docs/direct.md §2).
+bool hfgi_scan_sample(hfgi_Scan s, int i, int n_v, vec2 d, float base, out vec2 q, out float omega) {
+    float t = max(s.n0.x, s.n0.y) * exp2(-float(n_v - 1 - i) / float(s.level_step));
+    q = s.p + t * d;
+    omega = 0.0;
+    if (!s.wrap && (q.x < -1e-3 || q.y < -1e-3 || q.x > s.n0.x - 1.0 + 1e-3 || q.y > s.n0.y - 1.0 + 1e-3)) return false;
+    float dh = hfgi_height_at(hfgi_scan_level(i, s.level_bias), q, s.work, s.stack_mode, s.wrap) - base;
+    omega = atan(dh / (t * s.texel_size));
+    return true;
+}
+
 #endif

@@ -97,17 +97,11 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stac
 void main() {
     uvec2 r = gl_GlobalInvocationID.xy;
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
-    uvec2 work = uvec2(pc.work_width, pc.work_height);
     bool wrap = pc.wrap != 0u;
-    bool stack_mode = pc.stack_mode != 0u;
-    hfgi_Level l0 = hfgi_table[0];
-    vec2 n0 = vec2(float(l0.width), float(l0.height));
-    vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5; // receiver in level-0 texels
-    float big_n = max(n0.x, n0.y);
-
-    vec3 N = normal_at(p, wrap);
-
-    for (int i = 0; i < HFGI_NV; ++i) hfgi_base[i] = hfgi_height_at(hfgi_scan_level(i, pc.level_bias), p, work, stack_mode, wrap);
+    hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
+                                     pc.texel_size, pc.stack_mode != 0u, wrap);
+    vec3 N = normal_at(scan.p, wrap);
+    for (int i = 0; i < HFGI_NV; ++i) hfgi_base[i] = hfgi_scan_base(scan, i);
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = 0u; j < pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;
@@ -116,16 +110,14 @@ void main() {
         vec3 u[HFGI_N];
         for (int l = 0; l < HFGI_N; ++l) u[l] = vec3(0.0);
         for (int i = 0; i < HFGI_NV; ++i) {
-            float t = big_n * exp2(-float(HFGI_NV - 1 - i) / float(pc.level_step));
-            vec2 q = p + t * d;
-            if (!wrap && (q.x < -1e-3 || q.y < -1e-3 || q.x > n0.x - 1.0 + 1e-3 || q.y > n0.y - 1.0 + 1e-3)) break;
-            float dh = hfgi_height_at(hfgi_scan_level(i, pc.level_bias), q, work, stack_mode, wrap) - hfgi_base[i];
-            float omega = atan(dh / (t * pc.texel_size));
+            vec2 q;
+            float omega;
+            if (!hfgi_scan_sample(scan, i, HFGI_NV, d, hfgi_base[i], q, omega)) break;
             if (omega > running) {
                 // Casting-set member (eq. 6), seen over [running, ω): eq. 12 telescoped.
                 float seg[HFGI_N];
                 hfgi_interval(running, omega, seg);
-                vec3 rad = member_radiance(hfgi_radiance_level[i], q, omega, d, work, pc.radiance_stack != 0u, wrap);
+                vec3 rad = member_radiance(hfgi_radiance_level[i], q, omega, d, scan.work, pc.radiance_stack != 0u, wrap);
                 for (int l = 0; l < HFGI_N; ++l) u[l] += rad * seg[l];
                 running = omega;
             }

@@ -23,11 +23,16 @@ layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   /
 layout(push_constant) uniform Push { hfgi_TruthPush pc; };
 #include "hfgi_sh.glsl"
 
-float height_at(ivec2 t) {
+// Index of texel t, clamped to the edge or periodic with wrap.
+uint texel_index(ivec2 t) {
     int w = int(pc.width), h = int(pc.height);
     if (pc.wrap != 0u) { t = ivec2(((t.x % w) + w) % w, ((t.y % h) + h) % h); }
     else { t = clamp(t, ivec2(0), ivec2(w - 1, h - 1)); }
-    return hfgi_h[uint(t.y) * pc.width + uint(t.x)];
+    return uint(t.y) * pc.width + uint(t.x);
+}
+
+float height_at(ivec2 t) {
+    return hfgi_h[texel_index(t)];
 }
 
 float bilinear_h(vec2 q) {
@@ -38,10 +43,7 @@ float bilinear_h(vec2 q) {
 }
 
 vec3 source_at(ivec2 t) {
-    int w = int(pc.width), h = int(pc.height);
-    if (pc.wrap != 0u) { t = ivec2(((t.x % w) + w) % w, ((t.y % h) + h) % h); }
-    else { t = clamp(t, ivec2(0), ivec2(w - 1, h - 1)); }
-    return hfgi_source[uint(t.y) * pc.width + uint(t.x)].rgb;
+    return hfgi_source[texel_index(t)].rgb;
 }
 
 vec3 bilinear_source(vec2 q) {

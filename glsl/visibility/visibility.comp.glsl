@@ -27,19 +27,9 @@ float hfgi_base[HFGI_NV];
 void main() {
     uvec2 r = gl_GlobalInvocationID.xy;
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
-    uvec2 work = uvec2(pc.work_width, pc.work_height);
-    bool wrap = pc.wrap != 0u;
-    bool stack_mode = pc.stack_mode != 0u;
-    hfgi_Level l0 = hfgi_table[0];
-    vec2 n0 = vec2(float(l0.width), float(l0.height));
-    vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5; // receiver in level-0 texels (§1)
-    float big_n = max(n0.x, n0.y);
-
-    // Receiver height at every level used (eq. 15 compares f_L(q) with f_L(p)).
-    for (int i = 0; i < HFGI_NV; ++i) {
-        uint L = hfgi_scan_level(i, pc.level_bias);
-        hfgi_base[i] = hfgi_height_at(L, p, work, stack_mode, wrap);
-    }
+    hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
+                                     pc.texel_size, pc.stack_mode != 0u, pc.wrap != 0u);
+    for (int i = 0; i < HFGI_NV; ++i) hfgi_base[i] = hfgi_scan_base(scan, i);
 
     float V[HFGI_N2];
     for (int k = 0; k < HFGI_N2; ++k) V[k] = 0.0;
@@ -47,17 +37,11 @@ void main() {
     for (uint j = 0u; j < pc.sample_count; ++j) {
         vec4 smp = hfgi_samples[pc.sample_offset + j];
         vec2 d = smp.xy;
-        // eq. 14–16: t_i = N·2^(−(n_v−1−i)/k) texels, level L_i = max(i − k·o, 0).
+        // eq. 14–16 (hfgi_scan_sample): the valid samples form a prefix of length count.
         int count = 0;
         for (int i = 0; i < HFGI_NV; ++i) {
-            float t = big_n * exp2(-float(HFGI_NV - 1 - i) / float(pc.level_step));
-            vec2 q = p + t * d;
-            // Valid within the domain, with a 1e-3 texel tolerance so that rays along the border do
-            // not depend on rounding (docs/direct.md §2).
-            if (!wrap && (q.x < -1e-3 || q.y < -1e-3 || q.x > n0.x - 1.0 + 1e-3 || q.y > n0.y - 1.0 + 1e-3)) break;
-            uint L = hfgi_scan_level(i, pc.level_bias);
-            float dh = hfgi_height_at(L, q, work, stack_mode, wrap) - hfgi_base[i];
-            hfgi_omega[i] = atan(dh / (t * pc.texel_size));
+            vec2 q;
+            if (!hfgi_scan_sample(scan, i, HFGI_NV, d, hfgi_base[i], q, hfgi_omega[i])) break;
             count = i + 1;
         }
         // eq. 17: max of the B-spline through ω_0..ω_{count−1} at knots and mid-points,

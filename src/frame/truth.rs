@@ -1,7 +1,7 @@
 //! Stage `reference.truth`: the brute-force ground truth of CONVENTIONS.md on the GPU
 //! (`glsl/reference/truth.comp.glsl`; docs/accuracy.md §1). The shader integrates per texel
 //! (irradiance, or the SH projections `V`/`U`); the host finishes each texel in f64 with
-//! [`crate::reference::truth::finish_texel`], exactly as the CPU version
+//! [`crate::reference::truth::Finisher`], exactly as the CPU version
 //! ([`crate::reference::truth::render_truth`]) does, and feeds each bounce's exit radiance to
 //! the next. Work is split into bands of rows, one submission each, so that a long reference
 //! reports progress and never holds the queue for long.
@@ -15,9 +15,8 @@ use gpu_allocator::MemoryLocation;
 use super::shared::TruthPush;
 use crate::error::Result;
 use crate::math::quadrature::gauss_legendre;
-use crate::math::triple;
 use crate::reference::direct::normals;
-use crate::reference::truth::{albedo, finish_texel, lighting_sh, TruthOutput, TruthSettings};
+use crate::reference::truth::{albedo, lighting_sh, Finisher, TruthOutput, TruthSettings};
 use crate::scene::model::Scene;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -102,7 +101,7 @@ pub fn render_truth_gpu_timed(
         let set = p.allocate_set(ctx, &binds)?;
         let nrm = normals(scene);
         let rho = albedo(scene);
-        let tri = triple::triple(n);
+        let finish = Finisher::new(scene, settings.sh_visibility);
         let rows_per_band = (16384 / w.max(1)).clamp(1, h) as u32;
         let chunk = azimuth_chunk(w, h, scene.wrap, settings, n);
         let passes = scene.gi.bounces as u64 + 1;
@@ -157,7 +156,7 @@ pub fn render_truth_gpu_timed(
                             [raw[o] as f64, raw[o + 1] as f64, raw[o + 2] as f64]
                         })
                         .collect();
-                    finish_texel(n, settings.sh_visibility, indirect, &light, &tri, &texel, nrm[t], rho[t])
+                    finish.texel(indirect, &texel, nrm[t], rho[t])
                 })
                 .collect())
         };

@@ -50,27 +50,34 @@ pub struct Scan<'a> {
 impl Scan<'_> {
     /// `ω_max` of eq. 17 at level-0 position `p` along azimuth `phi`.
     pub fn omega_max(&self, p: [f64; 2], phi: f64) -> f64 {
+        let omega: Vec<f64> = self.samples(p, phi).map(|(_, _, omega)| omega).collect();
+        bspline_max(&omega)
+    }
+
+    /// The valid samples of the scan from level-0 position `p` along azimuth `phi`, in order:
+    /// `(i, q_i, ω_i)` with `t_i` of eq. 14 in texels, the level offset of §5.2 and `ω_i` of
+    /// eq. 15; the scan ends at the first sample outside the domain (no wrap, docs/direct.md §2).
+    pub fn samples(&self, p: [f64; 2], phi: f64) -> impl Iterator<Item = (usize, [f64; 2], f64)> + '_ {
         let layout = &self.pyr.layout;
         let n_v = layout.count();
         let l0 = layout.levels[0];
         let (w, h) = (l0.width as f64, l0.height as f64);
         let big_n = w.max(h);
         let (dx, dy) = (phi.cos(), phi.sin());
-        let mut omega = Vec::with_capacity(n_v);
-        for i in 0..n_v {
-            // eq. 14 in texels, level offset of §5.2, eq. 15.
-            let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / self.k_v as f64);
-            let q = [p[0] + t * dx, p[1] + t * dy];
-            if !self.wrap
-                && (q[0] < -EDGE_TOL || q[1] < -EDGE_TOL || q[0] > w - 1.0 + EDGE_TOL || q[1] > h - 1.0 + EDGE_TOL)
-            {
-                break;
-            }
-            let level = scan_level(i, self.k_v, self.o_v);
-            let dh = self.pyr.height_at(level, q[0], q[1]) - self.pyr.height_at(level, p[0], p[1]);
-            omega.push((dh / (t * self.texel_size)).atan());
-        }
-        bspline_max(&omega)
+        (0..n_v)
+            .map(move |i| {
+                let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / self.k_v as f64);
+                (i, t, [p[0] + t * dx, p[1] + t * dy])
+            })
+            .take_while(move |(_, _, q)| {
+                self.wrap
+                    || !(q[0] < -EDGE_TOL || q[1] < -EDGE_TOL || q[0] > w - 1.0 + EDGE_TOL || q[1] > h - 1.0 + EDGE_TOL)
+            })
+            .map(move |(i, t, q)| {
+                let level = scan_level(i, self.k_v, self.o_v);
+                let dh = self.pyr.height_at(level, q[0], q[1]) - self.pyr.height_at(level, p[0], p[1]);
+                (i, q, (dh / (t * self.texel_size)).atan())
+            })
     }
 }
 

@@ -2,7 +2,7 @@
 //! radiance pyramid of the previous bounce (§5.3), casting-set scan with eq. 6 and eq. 12,
 //! wedges with `M_lin`/`M_bspl` and `Rot_z` (eq. 19–21), shading with the BRDF lobes (§7).
 
-use super::direct::{interpolate, normals, render_direct, scan_level, DirectOutput, Lobes, Scan, EDGE_TOL};
+use super::direct::{interpolate, normals, render_direct, DirectOutput, Lobes, Scan};
 use super::pyramid::{rescale, CpuPyramid};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
@@ -73,27 +73,12 @@ pub fn scan_radiance(
     normal: [f64; 3],
     radiance: &mut dyn FnMut(usize, [f64; 2], f64) -> [f64; 3],
 ) -> [Vec<f64>; 3] {
-    let layout = &scan.pyr.layout;
-    let n_v = layout.count();
-    let l0 = layout.levels[0];
-    let (w, h) = (l0.width as f64, l0.height as f64);
-    let big_n = w.max(h);
     let (dx, dy) = (phi.cos(), phi.sin());
     // ω_min: the receiver's tangent plane along φ (§3).
     let omega_min = -(normal[0] * dx + normal[1] * dy).clamp(-1.0, 1.0).asin();
     let mut u = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
     let mut running = omega_min;
-    for i in 0..n_v {
-        let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / scan.k_v as f64);
-        let q = [p[0] + t * dx, p[1] + t * dy];
-        if !scan.wrap
-            && (q[0] < -EDGE_TOL || q[1] < -EDGE_TOL || q[0] > w - 1.0 + EDGE_TOL || q[1] > h - 1.0 + EDGE_TOL)
-        {
-            break;
-        }
-        let level = scan_level(i, scan.k_v, scan.o_v);
-        let dh = scan.pyr.height_at(level, q[0], q[1]) - scan.pyr.height_at(level, p[0], p[1]);
-        let omega = (dh / (t * scan.texel_size)).atan();
+    for (i, q, omega) in scan.samples(p, phi) {
         if omega > running {
             // Casting-set member (eq. 6): it is seen over [running, ω); eq. 12 telescoped.
             let seg = nlp::interval(n, running, omega);

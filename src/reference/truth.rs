@@ -130,39 +130,48 @@ pub fn tangent_elevation(n: [f64; 3], phi: f64) -> f64 {
     (-(n[0] * phi.cos() + n[1] * phi.sin())).atan2(n[2])
 }
 
-/// Exit radiance of one texel from the reference's raw integral (docs/accuracy.md §1): exact
-/// mode `raw[0]` = `E` (rgb) → `ρ/π E`; SH mode, direct: `raw[k][0]` = `V_k` → `ρ/π ⟨L ⊛ V,
-/// cc_N⟩`; SH mode, indirect: `raw[k]` = `U_k` (rgb) → `ρ/π ⟨U, cc_N⟩`.
-#[allow(clippy::too_many_arguments)]
-pub fn finish_texel(
+/// What turns the reference's raw per-texel integrals into exit radiance: the lighting, and,
+/// built once, the triple-product tensor and the clamped-cosine ZH of order `n`.
+pub struct Finisher {
     n: usize,
     sh_visibility: bool,
-    indirect: bool,
-    light: &[[f64; 3]],
-    tri: &triple::Triple,
-    raw: &[[f64; 3]],
-    nrm: [f64; 3],
-    rho: [f64; 3],
-) -> [f64; 3] {
-    if !sh_visibility {
-        return [rho[0] / PI * raw[0][0], rho[1] / PI * raw[0][1], rho[2] / PI * raw[0][2]];
+    light: Vec<[f64; 3]>,
+    tri: triple::Triple,
+    cc: Vec<f64>,
+}
+
+impl Finisher {
+    pub fn new(scene: &Scene, sh_visibility: bool) -> Self {
+        let n = scene.gi.sh_order;
+        Self { n, sh_visibility, light: lighting_sh(scene), tri: triple::triple(n), cc: zh::clamped_cosine(n) }
     }
-    let t: Vec<[f64; 3]> = if indirect {
-        raw.to_vec()
-    } else {
-        let v: Vec<f64> = raw.iter().map(|r| r[0]).collect();
-        let per: Vec<Vec<f64>> =
-            (0..3).map(|ch| triple::product(tri, &light.iter().map(|l| l[ch]).collect::<Vec<_>>(), &v)).collect();
-        (0..n * n).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
-    };
-    let c = zh::rotate(n, &zh::clamped_cosine(n), nrm);
-    let mut e = [0.0; 3];
-    for (k, ck) in c.iter().enumerate() {
-        for ch in 0..3 {
-            e[ch] += t[k][ch] * ck;
+
+    /// Exit radiance of one texel from its raw integral (docs/accuracy.md §1): exact mode
+    /// `raw[0]` = `E` (rgb) → `ρ/π E`; SH mode, direct: `raw[k][0]` = `V_k` → `ρ/π ⟨L ⊛ V, cc_N⟩`;
+    /// SH mode, indirect: `raw[k]` = `U_k` (rgb) → `ρ/π ⟨U, cc_N⟩`.
+    pub fn texel(&self, indirect: bool, raw: &[[f64; 3]], nrm: [f64; 3], rho: [f64; 3]) -> [f64; 3] {
+        let n = self.n;
+        if !self.sh_visibility {
+            return [rho[0] / PI * raw[0][0], rho[1] / PI * raw[0][1], rho[2] / PI * raw[0][2]];
         }
+        let t: Vec<[f64; 3]> = if indirect {
+            raw.to_vec()
+        } else {
+            let v: Vec<f64> = raw.iter().map(|r| r[0]).collect();
+            let per: Vec<Vec<f64>> = (0..3)
+                .map(|ch| triple::product(&self.tri, &self.light.iter().map(|l| l[ch]).collect::<Vec<_>>(), &v))
+                .collect();
+            (0..n * n).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
+        };
+        let c = zh::rotate(n, &self.cc, nrm);
+        let mut e = [0.0; 3];
+        for (k, ck) in c.iter().enumerate() {
+            for ch in 0..3 {
+                e[ch] += t[k][ch] * ck;
+            }
+        }
+        [rho[0] / PI * e[0], rho[1] / PI * e[1], rho[2] / PI * e[2]]
     }
-    [rho[0] / PI * e[0], rho[1] / PI * e[1], rho[2] / PI * e[2]]
 }
 
 /// Per-texel albedo (linear RGB, f64).
@@ -197,7 +206,7 @@ pub fn render_truth(
     let (gx, gw) = gauss_legendre(settings.nodes as usize);
     let a_count = settings.azimuths as usize;
     let dphi = 2.0 * PI / a_count as f64;
-    let tri = triple::triple(n);
+    let finish = Finisher::new(scene, settings.sh_visibility);
     let rho = albedo(scene);
     // GL nodes and weights on [a, b].
     let nodes = |a: f64, b: f64| -> Vec<(f64, f64)> {
@@ -238,7 +247,7 @@ pub fn render_truth(
             }
             let raw: Vec<[f64; 3]> =
                 if settings.sh_visibility { vis.iter().map(|v| [*v, 0.0, 0.0]).collect() } else { vec![e] };
-            direct.push(finish_texel(n, settings.sh_visibility, false, &light, &tri, &raw, nrm[p], rho[p]));
+            direct.push(finish.texel(false, &raw, nrm[p], rho[p]));
             done += 1;
             progress(done, total_units);
         }
@@ -294,7 +303,7 @@ pub fn render_truth(
                     }
                 }
                 let raw = if settings.sh_visibility { u } else { vec![e] };
-                out.push(finish_texel(n, settings.sh_visibility, true, &light, &tri, &raw, nrm[p], rho[p]));
+                out.push(finish.texel(true, &raw, nrm[p], rho[p]));
                 done += 1;
                 progress(done, total_units);
             }

@@ -6,7 +6,7 @@
 
 use ash::vk;
 
-use super::pipeline::{allocate_set, destroy_objects, Bind, DescriptorKind};
+use super::pipeline::{allocate_set, create_layouts, create_pool, destroy_objects, Bind, DescriptorKind};
 use super::{Buffer, Context, Image};
 use crate::error::{Error, Result, VkCall};
 use crate::shaders::Spirv;
@@ -67,30 +67,7 @@ impl GraphicsPipeline {
         };
         let mut modules = Vec::new();
         let r = (|| -> Result<()> {
-            let bindings: Vec<_> = desc
-                .kinds
-                .iter()
-                .enumerate()
-                .map(|(i, k)| {
-                    vk::DescriptorSetLayoutBinding::default()
-                        .binding(i as u32)
-                        .descriptor_type(k.raw())
-                        .descriptor_count(1)
-                        .stage_flags(GRAPHICS_STAGES)
-                })
-                .collect();
-            me.set_layout = unsafe {
-                d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
-            }
-            .vk("vkCreateDescriptorSetLayout")?;
-            let ranges =
-                [vk::PushConstantRange::default().stage_flags(GRAPHICS_STAGES).offset(0).size(desc.push_size.max(4))];
-            let set_layouts = [me.set_layout];
-            let mut pli = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-            if desc.push_size > 0 {
-                pli = pli.push_constant_ranges(&ranges);
-            }
-            me.layout = unsafe { d.create_pipeline_layout(&pli, None) }.vk("vkCreatePipelineLayout")?;
+            create_layouts(ctx, desc.kinds, GRAPHICS_STAGES, desc.push_size, &mut me.set_layout, &mut me.layout)?;
             for s in [desc.vertex, desc.fragment] {
                 let m = unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(s.words), None) }
                     .vk("vkCreateShaderModule")?;
@@ -155,17 +132,7 @@ impl GraphicsPipeline {
             let made = unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &ci, None) };
             me.pipeline = made.map_err(|(_, e)| Error::Vulkan { call: "vkCreateGraphicsPipelines", result: e })?[0];
             ctx.set_name(me.pipeline, &me.name);
-            let mut sizes = Vec::new();
-            for k in [DescriptorKind::StorageBuffer, DescriptorKind::StorageImage] {
-                let n = desc.kinds.iter().filter(|x| **x == k).count() as u32;
-                if n > 0 {
-                    sizes.push(vk::DescriptorPoolSize { ty: k.raw(), descriptor_count: n * desc.max_sets.max(1) });
-                }
-            }
-            if !sizes.is_empty() {
-                let pi = vk::DescriptorPoolCreateInfo::default().max_sets(desc.max_sets.max(1)).pool_sizes(&sizes);
-                me.pool = unsafe { d.create_descriptor_pool(&pi, None) }.vk("vkCreateDescriptorPool")?;
-            }
+            me.pool = create_pool(ctx, desc.kinds, desc.max_sets)?;
             Ok(())
         })();
         for m in modules {

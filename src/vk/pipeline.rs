@@ -53,17 +53,6 @@ impl ComputePipeline {
         max_sets: u32,
     ) -> Result<Self> {
         let d = ctx.device();
-        let bindings: Vec<_> = kinds
-            .iter()
-            .enumerate()
-            .map(|(i, k)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(k.raw())
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
         let mut me = Self {
             name: shader.name.to_string(),
             pipeline: vk::Pipeline::null(),
@@ -74,20 +63,7 @@ impl ComputePipeline {
             push_size,
         };
         let r = (|| -> Result<()> {
-            me.set_layout = unsafe {
-                d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
-            }
-            .vk("vkCreateDescriptorSetLayout")?;
-            let ranges = [vk::PushConstantRange::default()
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                .offset(0)
-                .size(push_size.max(4))];
-            let set_layouts = [me.set_layout];
-            let mut pli = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-            if push_size > 0 {
-                pli = pli.push_constant_ranges(&ranges);
-            }
-            me.layout = unsafe { d.create_pipeline_layout(&pli, None) }.vk("vkCreatePipelineLayout")?;
+            create_layouts(ctx, kinds, vk::ShaderStageFlags::COMPUTE, push_size, &mut me.set_layout, &mut me.layout)?;
             let module =
                 unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(shader.words), None) }
                     .vk("vkCreateShaderModule")?;
@@ -111,17 +87,7 @@ impl ComputePipeline {
             unsafe { d.destroy_shader_module(module, None) };
             me.pipeline = made.map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })?[0];
             ctx.set_name(me.pipeline, &me.name);
-            let mut sizes = Vec::new();
-            for k in [DescriptorKind::StorageBuffer, DescriptorKind::StorageImage] {
-                let n = kinds.iter().filter(|x| **x == k).count() as u32;
-                if n > 0 {
-                    sizes.push(vk::DescriptorPoolSize { ty: k.raw(), descriptor_count: n * max_sets.max(1) });
-                }
-            }
-            if !sizes.is_empty() {
-                let pi = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets.max(1)).pool_sizes(&sizes);
-                me.pool = unsafe { d.create_descriptor_pool(&pi, None) }.vk("vkCreateDescriptorPool")?;
-            }
+            me.pool = create_pool(ctx, kinds, max_sets)?;
             Ok(())
         })();
         match r {
@@ -164,6 +130,60 @@ impl ComputePipeline {
     pub fn destroy(&mut self, ctx: &Context) {
         destroy_objects(ctx, &mut self.pool, &mut self.pipeline, &mut self.layout, &mut self.set_layout);
     }
+}
+
+/// Creates the descriptor-set layout (binding `i` of type `kinds[i]`, visible to `stages`) and
+/// the pipeline layout with a `push_size`-byte push-constant range (shared by compute and
+/// graphics pipelines). Handles are written as they are created, so a failure half way leaves
+/// them for [`destroy_objects`].
+pub(crate) fn create_layouts(
+    ctx: &Context,
+    kinds: &[DescriptorKind],
+    stages: vk::ShaderStageFlags,
+    push_size: u32,
+    set_layout: &mut vk::DescriptorSetLayout,
+    layout: &mut vk::PipelineLayout,
+) -> Result<()> {
+    let d = ctx.device();
+    let bindings: Vec<_> = kinds
+        .iter()
+        .enumerate()
+        .map(|(i, k)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(k.raw())
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    *set_layout = unsafe {
+        d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
+    }
+    .vk("vkCreateDescriptorSetLayout")?;
+    let ranges = [vk::PushConstantRange::default().stage_flags(stages).offset(0).size(push_size.max(4))];
+    let set_layouts = [*set_layout];
+    let mut pli = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+    if push_size > 0 {
+        pli = pli.push_constant_ranges(&ranges);
+    }
+    *layout = unsafe { d.create_pipeline_layout(&pli, None) }.vk("vkCreatePipelineLayout")?;
+    Ok(())
+}
+
+/// A descriptor pool for `max_sets` sets of `kinds` (null when `kinds` is empty).
+pub(crate) fn create_pool(ctx: &Context, kinds: &[DescriptorKind], max_sets: u32) -> Result<vk::DescriptorPool> {
+    let mut sizes = Vec::new();
+    for k in [DescriptorKind::StorageBuffer, DescriptorKind::StorageImage] {
+        let n = kinds.iter().filter(|x| **x == k).count() as u32;
+        if n > 0 {
+            sizes.push(vk::DescriptorPoolSize { ty: k.raw(), descriptor_count: n * max_sets.max(1) });
+        }
+    }
+    if sizes.is_empty() {
+        return Ok(vk::DescriptorPool::null());
+    }
+    let pi = vk::DescriptorPoolCreateInfo::default().max_sets(max_sets.max(1)).pool_sizes(&sizes);
+    unsafe { ctx.device().create_descriptor_pool(&pi, None) }.vk("vkCreateDescriptorPool")
 }
 
 /// Destroys a pipeline's descriptor pool (and so its sets), pipeline and layouts, skipping null

@@ -133,16 +133,9 @@ fn rel_l2(x: &[[f32; 3]], r: &[[f64; 3]]) -> f64 {
 
 /// Reference layers for `bounces` bounces: (direct, indirect, total).
 fn truth_layers(t: &TruthOutput, bounces: u32) -> [Vec<[f64; 3]>; 3] {
-    let mut ind = vec![[0.0; 3]; t.direct.len()];
-    for b in t.indirect_bounces.iter().take(bounces as usize) {
-        for (o, v) in ind.iter_mut().zip(b) {
-            for c in 0..3 {
-                o[c] += v[c];
-            }
-        }
-    }
-    let tot = t.direct.iter().zip(&ind).map(|(d, i)| [d[0] + i[0], d[1] + i[1], d[2] + i[2]]).collect();
-    [t.direct.clone(), ind, tot]
+    let b = t.indirect_bounces.iter().take(bounces as usize).cloned().collect();
+    let a = TruthOutput::assemble(t.width, t.height, t.direct.clone(), b);
+    [a.direct, a.indirect, a.total]
 }
 
 /// Median milliseconds per stage, GPU memory in bytes, and the last frame's layers.
