@@ -1,11 +1,12 @@
 // hfgi — normalised Legendre polynomial (NLP) projections of elevation functions (NS09 §4).
-// Requires the specialization constant HFGI_N (SH order n) declared by the includer.
+// Requires the specialization constants HFGI_N (SH order n) and HFGI_NE ≥ HFGI_N (the length of
+// the caller's vectors; the NLP coefficients fill the first n) declared by the includer.
 #ifndef HFGI_NLP_GLSL
 #define HFGI_NLP_GLSL
 
 // Occlusion vector v̄(σ) of eq. 10: v̄_l = ∫_{-1}^{sin σ} P̂_l(z) dz, in closed form
 // v̄_0 = (x+1)/√2, v̄_l = √((2l+1)/2) (P_{l+1}(x) − P_{l−1}(x)) / (2l+1), x = sin σ.
-void hfgi_occlusion(float sigma, out float v[HFGI_N]) {
+void hfgi_occlusion(float sigma, out float v[HFGI_NE]) {
     float x = sin(sigma);
     float pm1 = 1.0; // P_{l-1}
     float p0 = x;    // P_l
@@ -28,9 +29,9 @@ void hfgi_occlusion(float sigma, out float v[HFGI_N]) {
 // proportional to Δx, so a thin interval (the casting-set segments of nearly flat terrain,
 // ~1e-6 rad wide) keeps f32 precision relative to its own width instead of to 1
 // (docs/hard-cases.md: the two-sided form lost the whole indirect light of 1e-6-high terrain).
-void hfgi_interval(float a, float b, out float v[HFGI_N]) {
+void hfgi_interval(float a, float b, out float v[HFGI_NE]) {
+    for (int l = 0; l < HFGI_NE; ++l) v[l] = 0.0;
     if (b <= a) {
-        for (int l = 0; l < HFGI_N; ++l) v[l] = 0.0;
         return;
     }
     float xa = sin(a);

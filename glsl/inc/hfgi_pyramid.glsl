@@ -18,11 +18,22 @@ float hfgi_stack_fetch(uint source, uint plane, ivec2 p, uvec2 work, bool wrap) 
     return HFGI_STACK_READ(source, plane * work.x * work.y + uint(y) * work.x + uint(x));
 }
 
+// Flags of hfgi_VisibilityPush.flags / hfgi_IndirectPush.flags (docs/accuracy.md §4; the Rust
+// twins are `frame::shared::FLAG_*`).
+const uint HFGI_FLAG_RAW_LEVEL0 = 1u; // level 0 is the bilinear surface itself, not its B-spline
+const uint HFGI_FLAG_HORIZON_SAMPLES = 2u; // ω_max = largest sample, not eq. 17's spline maximum
+const uint HFGI_FLAG_TANGENT = 4u; // ω_min = the exact tangent elevation, not −asin(N·d)
+const uint HFGI_FLAG_ACCUMULATE = 8u; // add to the output (a later azimuth chunk of the same set)
+
 // Value of table entry `plane` (level `l`, of a pyramid whose level 0 is `base`) at level-0
-// position p0. Stack mode: bilinear on the synthesized plane (working resolution `work`).
-// Pyramid mode: the cubic B-spline of the decimated level, on the fly.
-float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 work, bool stack_mode, bool wrap) {
+// position p0. `raw`: the unfiltered level as a bilinear surface (gi.level0 = "bilinear"; only
+// meaningful on level 0, whose texels are the samples themselves). Otherwise, stack mode:
+// bilinear on the synthesized plane (working resolution `work`); pyramid mode: the cubic
+// B-spline of the decimated level, on the fly.
+float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 work, bool stack_mode, bool wrap,
+                      bool raw) {
     vec2 n0 = vec2(float(base.width), float(base.height));
+    if (raw) return hfgi_bilinear_at(l, hfgi_rescale(p0, n0, l), wrap);
     if (stack_mode) {
         vec2 pw = (p0 + 0.5) * vec2(work) / n0 - 0.5;
         vec2 fl = floor(pw);
@@ -37,17 +48,6 @@ float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 
     return hfgi_bspline_at(l, hfgi_rescale(p0, n0, l), wrap);
 }
 
-// Height at level `level` (hfgi_table) and level-0 position p0.
-float hfgi_height_at(uint level, vec2 p0, uvec2 work, bool stack_mode, bool wrap) {
-    return hfgi_pyramid_at(hfgi_table[0], hfgi_table[level], level, p0, work, stack_mode, wrap);
-}
-
-// Pyramid level read by scan sample i (NS09 §5.2 level offset; docs/direct.md §2): the level
-// whose texel matches the step t_i, biased k·o levels finer ("sharper long-range shadows").
-uint hfgi_scan_level(int i, uint bias) {
-    return uint(max(i - int(bias), 0));
-}
-
 // The horizon scan of docs/direct.md §1–2 (eq. 14–16), shared by the visibility and the indirect
 // passes: the receiver of grid cell r and, per azimuth, its samples.
 struct hfgi_Scan {
@@ -59,30 +59,50 @@ struct hfgi_Scan {
     float texel_size;
     bool stack_mode;
     bool wrap;
+    bool raw0;        // HFGI_FLAG_RAW_LEVEL0
+    int first;        // first sample index: −near_steps (sub-texel samples, docs/accuracy.md §4)
+    int end;          // one past the last: n_v + far_steps (samples beyond max(W, H) texels)
 };
 
+// Height at level `level` (hfgi_table) and level-0 position p0.
+float hfgi_height_at(hfgi_Scan s, uint level, vec2 p0) {
+    return hfgi_pyramid_at(hfgi_table[0], hfgi_table[level], level, p0, s.work, s.stack_mode, s.wrap,
+                           s.raw0 && level == 0u);
+}
+
+// Pyramid level read by scan sample i (NS09 §5.2 level offset; docs/direct.md §2): the level
+// whose texel matches the step t_i, biased k·o levels finer ("sharper long-range shadows"),
+// clamped to the pyramid (sub-texel samples read level 0, samples past max(W, H) the coarsest).
+uint hfgi_scan_level(int i, uint bias, int n_v) {
+    return uint(clamp(i - int(bias), 0, n_v - 1));
+}
+
+// `extent` = near_steps | far_steps << 16 (hfgi_VisibilityPush.scan_extent).
 hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias, float texel_size, bool stack_mode,
-                          bool wrap) {
+                          bool wrap, uint flags, uint extent, int n_v) {
     hfgi_Level l0 = hfgi_table[0];
     vec2 n0 = vec2(float(l0.width), float(l0.height));
     vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5;
-    return hfgi_Scan(p, n0, work, level_step, level_bias, texel_size, stack_mode, wrap);
+    return hfgi_Scan(p, n0, work, level_step, level_bias, texel_size, stack_mode, wrap,
+                     (flags & HFGI_FLAG_RAW_LEVEL0) != 0u, -int(extent & 0xffffu), n_v + int(extent >> 16));
 }
 
-// The receiver's height at the level read by sample i (eq. 15 compares f_L(q) with f_L(p)).
-float hfgi_scan_base(hfgi_Scan s, int i) {
-    return hfgi_height_at(hfgi_scan_level(i, s.level_bias), s.p, s.work, s.stack_mode, s.wrap);
+// The receiver's height at pyramid level `level` (eq. 15 compares f_L(q) with f_L(p)).
+float hfgi_scan_base(hfgi_Scan s, uint level) {
+    return hfgi_height_at(s, level, s.p);
 }
 
-// Sample i of n_v along direction d: t_i = N·2^(−(n_v−1−i)/k) texels, q = p + t_i·d, level
-// max(i − k·o, 0), blocking angle ω_i. False once q has left the domain (no wrap), with a 1e-3
-// texel tolerance so that rays along the border do not depend on rounding (docs/direct.md §2).
+// Sample i of n_v along direction d: t_i = N·2^(−(n_v−1−i)/k) texels (i < 0: inside the first
+// texel; i ≥ n_v: past N, toward the far corner), q = p + t_i·d, level hfgi_scan_level, blocking
+// angle ω_i against `base` (the receiver at that level). False once q has left the domain (no
+// wrap), with a 1e-3 texel tolerance so that rays along the border do not depend on rounding
+// (docs/direct.md §2).
 bool hfgi_scan_sample(hfgi_Scan s, int i, int n_v, vec2 d, float base, out vec2 q, out float omega) {
     float t = max(s.n0.x, s.n0.y) * exp2(-float(n_v - 1 - i) / float(s.level_step));
     q = s.p + t * d;
     omega = 0.0;
     if (!s.wrap && (q.x < -1e-3 || q.y < -1e-3 || q.x > s.n0.x - 1.0 + 1e-3 || q.y > s.n0.y - 1.0 + 1e-3)) return false;
-    float dh = hfgi_height_at(hfgi_scan_level(i, s.level_bias), q, s.work, s.stack_mode, s.wrap) - base;
+    float dh = hfgi_height_at(s, hfgi_scan_level(i, s.level_bias, n_v), q) - base;
     omega = atan(dh / (t * s.texel_size));
     return true;
 }

@@ -38,8 +38,8 @@ struct hfgi_VisibilityPush {
     uint level_bias;    // k_v * o_v: scan sample i reads level max(i - level_bias, 0)
     float texel_size;   // world units per texel
     uint stack_mode;    // 1: stack, 0: true pyramid
-    uint pad0;
-    uint pad1;
+    uint flags;         // HFGI_FLAG_* (hfgi_pyramid.glsl; docs/accuracy.md §4)
+    uint scan_extent;   // near_steps | far_steps << 16: scan samples before t = 1 texel and past N
 };
 
 // Push constants of the direct shading pass. 112 bytes.
@@ -62,7 +62,7 @@ struct hfgi_ShadePush {
     vec4 camera_lo;     // low part: position = camera + camera_lo (f64 split in two f32)
 };
 
-// Push constants of the indirect scan (indirect.scan). 64 bytes.
+// Push constants of the indirect scan (indirect.scan). 80 bytes.
 struct hfgi_IndirectPush {
     uint work_width;      // receiver grid
     uint work_height;
@@ -74,9 +74,13 @@ struct hfgi_IndirectPush {
     uint sample_count;    // azimuths m
     uint radiance_levels; // n_u, levels per channel of the radiance pyramid
     uint radiance_stack;  // 1: the radiance pyramid is a stack
+    uint flags;           // HFGI_FLAG_* (hfgi_pyramid.glsl; docs/accuracy.md §4)
+    uint scan_extent;     // near_steps | far_steps << 16, as in hfgi_VisibilityPush
+    vec4 specular;        // Phong k_s (vector pyramid)
+    uint sample_offset;   // first azimuth of this dispatch (frame::shared::azimuth_chunks)
     uint pad0;
     uint pad1;
-    vec4 specular;        // Phong k_s (vector pyramid)
+    uint pad2;
 };
 
 // Push constants of radiance.gather. 32 bytes.

@@ -10,6 +10,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
 layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
+layout(constant_id = 3) const int HFGI_NE = 4;     // values per azimuth: n (NLP) or n(n+1)/2 (legendre)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -19,20 +20,21 @@ layout(std430, binding = 3) readonly buffer RLevels { float hfgi_radiance_levels
 layout(std430, binding = 4) readonly buffer RTable { hfgi_Level hfgi_radiance_table[]; };
 layout(std430, binding = 5) readonly buffer RStack { float hfgi_radiance_stack[]; };
 layout(std430, binding = 6) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ
-layout(std430, binding = 7) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × n
-layout(std430, binding = 8) readonly buffer RLevel { uint hfgi_radiance_level[]; }; // per scan sample
-layout(std430, binding = 9) writeonly buffer U { vec4 hfgi_u[]; };            // receivers × n²
+layout(std430, binding = 7) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE
+layout(std430, binding = 8) readonly buffer RLevel { uint hfgi_radiance_level[]; }; // per scan sample, from `first`
+layout(std430, binding = 9) buffer U { vec4 hfgi_u[]; };                      // receivers × n², over azimuth chunks
 layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
     float hfgi_klm[64];
     float hfgi_zh_diffuse[8];
     float hfgi_zh_glossy[8]; // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
+layout(std430, binding = 11) readonly buffer Elev { float hfgi_elev[]; };     // hfgi_elevation.glsl
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 #define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : hfgi_radiance_stack[i])
 #include "hfgi_pyramid.glsl"
-#include "hfgi_nlp.glsl"
+#include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
 
 float hfgi_base[HFGI_NV];
@@ -65,13 +67,15 @@ vec3 normal_at(vec2 q, bool wrap) {
 // Exit radiance of casting point q toward the receiver (docs/indirect.md §2): the diffuse RGB
 // pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
 // direction back to the receiver about q's normal.
-vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stack_mode, bool wrap) {
+// With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image.
+vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stack_mode, bool wrap, bool raw0) {
+    bool raw = raw0 && lv == 0u;
     hfgi_Level r0 = hfgi_radiance_table[0];
     uint n_u = pc.radiance_levels;
     vec3 rad;
     for (uint c = 0u; c < 3u; ++c) {
         uint e = c * n_u + lv;
-        rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, stack_mode, wrap);
+        rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, stack_mode, wrap, raw);
     }
     if (HFGI_VECTOR != 0) {
         vec3 nc = normal_at(q, wrap);
@@ -84,7 +88,7 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stac
                 vec3 t;
                 for (uint c = 0u; c < 3u; ++c) {
                     uint e = (3u + 3u * uint(k) + c) * n_u + lv;
-                    t[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap);
+                    t[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap, raw);
                 }
                 gl += t * (hfgi_zh_glossy[l] * hfgi_y[k]);
             }
@@ -99,37 +103,42 @@ void main() {
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
     bool wrap = pc.wrap != 0u;
     hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
-                                     pc.texel_size, pc.stack_mode != 0u, wrap);
+                                     pc.texel_size, pc.stack_mode != 0u, wrap, pc.flags, pc.scan_extent, HFGI_NV);
     vec3 N = normal_at(scan.p, wrap);
-    for (int i = 0; i < HFGI_NV; ++i) hfgi_base[i] = hfgi_scan_base(scan, i);
+    bool tangent = (pc.flags & HFGI_FLAG_TANGENT) != 0u;
+    for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
-    for (uint j = 0u; j < pc.sample_count; ++j) {
+    for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;
-        // ω_min: the tangent plane of the receiver along φ (§3).
-        float running = -asin(clamp(dot(N.xy, d), -1.0, 1.0));
-        vec3 u[HFGI_N];
-        for (int l = 0; l < HFGI_N; ++l) u[l] = vec3(0.0);
-        for (int i = 0; i < HFGI_NV; ++i) {
+        // ω_min: the tangent plane of the receiver along φ (§3): the paper's −asin(N·d), or the
+        // exact tangent elevation atan2(−N·d, N_z) (CONVENTIONS.md; docs/accuracy.md §4).
+        float running = tangent ? atan(-dot(N.xy, d), N.z) : -asin(clamp(dot(N.xy, d), -1.0, 1.0));
+        vec3 u[HFGI_NE];
+        for (int l = 0; l < HFGI_NE; ++l) u[l] = vec3(0.0);
+        for (int i = scan.first; i < scan.end; ++i) {
             vec2 q;
             float omega;
-            if (!hfgi_scan_sample(scan, i, HFGI_NV, d, hfgi_base[i], q, omega)) break;
+            float b = hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)];
+            if (!hfgi_scan_sample(scan, i, HFGI_NV, d, b, q, omega)) break;
             if (omega > running) {
                 // Casting-set member (eq. 6), seen over [running, ω): eq. 12 telescoped.
-                float seg[HFGI_N];
-                hfgi_interval(running, omega, seg);
-                vec3 rad = member_radiance(hfgi_radiance_level[i], q, omega, d, scan.work, pc.radiance_stack != 0u, wrap);
-                for (int l = 0; l < HFGI_N; ++l) u[l] += rad * seg[l];
+                float seg[HFGI_NE];
+                hfgi_elevation(running, omega, seg);
+                vec3 rad = member_radiance(hfgi_radiance_level[i - scan.first], q, omega, d, scan.work,
+                                           pc.radiance_stack != 0u, wrap, scan.raw0);
+                for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
                 running = omega;
             }
         }
         // eq. 19–21 folded: U += A_j u_j.
-        uint base = j * uint(HFGI_N2 * HFGI_N);
+        uint base = j * uint(HFGI_N2 * HFGI_NE);
         for (int k = 0; k < HFGI_N2; ++k) {
             vec3 acc = vec3(0.0);
-            for (int l = 0; l < HFGI_N; ++l) acc += hfgi_fold[base + uint(k * HFGI_N + l)] * u[l];
+            for (int l = 0; l < HFGI_NE; ++l) acc += hfgi_fold[base + uint(k * HFGI_NE + l)] * u[l];
             hfgi_U[k] += acc;
         }
     }
     uint out_base = (r.y * pc.work_width + r.x) * uint(HFGI_N2);
-    for (int k = 0; k < HFGI_N2; ++k) hfgi_u[out_base + uint(k)] = vec4(hfgi_U[k], 0.0);
+    bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
+    for (int k = 0; k < HFGI_N2; ++k) hfgi_u[out_base + uint(k)] = vec4(hfgi_U[k], 0.0) + (acc ? hfgi_u[out_base + uint(k)] : vec4(0.0));
 }

@@ -1,6 +1,7 @@
 #version 460
 // Diagnostic: samples the height pyramid at arbitrary (level, x, y) queries, x and y in
-// level-0 texel units, exactly as the scanning passes do (hfgi_height_at).
+// level-0 texel units, exactly as the scanning passes do (hfgi_pyramid_at; query.w ≠ 0 reads the level
+// raw, as gi.level0 = "bilinear" reads level 0).
 // pc.level: 0 = stack mode, 1 = pyramid mode; pc.out_width/height = working resolution.
 #include "hfgi_shared.glsl"
 layout(local_size_x = 64) in;
@@ -16,6 +17,7 @@ void main() {
     uint q = gl_GlobalInvocationID.x;
     if (q >= uint(hfgi_queries.length())) return;
     vec4 query = hfgi_queries[q];
-    hfgi_result[q] = hfgi_height_at(uint(query.x), query.yz, uvec2(pc.out_width, pc.out_height), pc.level == 0u,
-                                    pc.wrap != 0u);
+    uint level = uint(query.x);
+    hfgi_result[q] = hfgi_pyramid_at(hfgi_table[0], hfgi_table[level], level, query.yz, uvec2(pc.out_width, pc.out_height),
+                                     pc.level == 0u, pc.wrap != 0u, query.w != 0.0);
 }

@@ -18,9 +18,10 @@ use super::pyramid::HeightPyramid;
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
 use super::shade::ShadePass;
-use super::shared::{IndirectPush, ShadePush};
+use super::shared::{azimuth_chunks, IndirectPush, ShadePush, FLAG_ACCUMULATE, INDIRECT_SAMPLE_BUDGET};
 use crate::error::Result;
-use crate::math::azimuth;
+use crate::math::{azimuth, elevation};
+use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
 use crate::scene::model::{PyramidMode, Scene};
 use crate::shaders;
@@ -38,12 +39,15 @@ pub struct IndirectPass {
     shade_set: vk::DescriptorSet,
     buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce, incident
     push: IndirectPush,
+    /// Azimuth chunks `(first, count)`, one dispatch each.
+    chunks: Vec<(u32, u32)>,
     shade_push: ShadePush,
 }
 
 const U: usize = 3;
 const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
+const ELEVATION: usize = 6;
 
 impl IndirectPass {
     pub fn new(ctx: &Context, pyramid: &HeightPyramid, shade: &ShadePass, scene: &Scene) -> Result<Self> {
@@ -54,8 +58,11 @@ impl IndirectPass {
         let vector = vector_pyramid(scene);
         let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
         let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
-        let fold: Vec<f32> =
-            azimuth::fold(n, &set, gi.interpolation).iter().flat_map(|a| a.data.iter().map(|&v| v as f32)).collect();
+        let fold: Vec<f32> = azimuth::fold(n, &set, gi.interpolation, gi.elevation_basis)
+            .iter()
+            .flat_map(|a| a.data.iter().map(|&v| v as f32))
+            .collect();
+        let elev: Vec<f32> = elevation::fourier_table(n).iter().map(|&v| v as f32).collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -67,10 +74,11 @@ impl IndirectPass {
             for (name, size) in [
                 ("hfgi.indirect.samples", samples.len() as u64 * 16),
                 ("hfgi.indirect.fold", fold.len() as u64 * 4),
-                ("hfgi.indirect.radiance_level", pyramid.layout().count() as u64 * 4),
+                ("hfgi.indirect.radiance_level", scan_steps(gi, pyramid.layout().count()).len() as u64 * 4),
                 ("hfgi.indirect.u", u_bytes),
                 ("hfgi.indirect.bounce", (2 * w * h * 16) as u64),
                 ("hfgi.indirect.incident", if vector { (w * h * n * n * 16) as u64 } else { 16 }),
+                ("hfgi.indirect.elevation", elev.len() as u64 * 4),
             ] {
                 bufs.push(Buffer::new(ctx, name, size.max(16), usage, MemoryLocation::GpuOnly)?);
             }
@@ -92,21 +100,28 @@ impl IndirectPass {
             // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
             let layout = pyramid.layout();
             let n_u = rad.pyramid.layout().count();
-            let levels: Vec<u32> = (0..layout.count())
-                .map(|i| {
-                    let t = w.max(h) as f64 * layout.tau(i);
+            let levels: Vec<u32> = scan_steps(gi, layout.count())
+                .into_iter()
+                .map(|tau| {
+                    let t = w.max(h) as f64 * tau;
                     radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32
                 })
                 .collect();
             memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
+            memory::upload_f32(ctx, &bufs[ELEVATION], 0, &elev)?;
             let scan = ComputePipeline::new(
                 ctx,
                 &shaders::INDIRECT_SCAN_COMP,
-                &[DescriptorKind::StorageBuffer; 11],
+                &[DescriptorKind::StorageBuffer; 12],
                 std::mem::size_of::<IndirectPush>() as u32,
-                &[(0, n as u32), (1, layout.count() as u32), (2, vector as u32)],
+                &[
+                    (0, n as u32),
+                    (1, layout.count() as u32),
+                    (2, vector as u32),
+                    (3, elevation::size(gi.elevation_basis, n) as u32),
+                ],
                 1,
             )?;
             let scan = pipes.push_get(scan);
@@ -127,6 +142,7 @@ impl IndirectPass {
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[U]),
                     Bind::Buffer(consts),
+                    Bind::Buffer(&bufs[ELEVATION]),
                 ],
             )?;
             let sh = ComputePipeline::new(
@@ -178,12 +194,16 @@ impl IndirectPass {
             sample_count: samples.len() as u32,
             radiance_levels: radiance.as_ref().map_or(0, |r| r.pyramid.layout().count() as u32),
             radiance_stack: radiance.as_ref().is_some_and(|r| r.pyramid.mode() == PyramidMode::Stack) as u32,
-            pad: [0; 2],
+            flags: super::shared::scan_flags(gi),
+            scan_extent: super::shared::scan_extent(gi),
             specular: {
                 let k = scene.material.specular.unwrap_or([0.0; 3]);
                 [k[0], k[1], k[2], 0.0]
             },
+            sample_offset: 0,
+            pad: [0; 3],
         };
+        let ladder = scan_steps(gi, pyramid.layout().count()).len() as u32;
         Ok(Self {
             radiance: radiance.expect("radiance"),
             scan: scan_pipe,
@@ -191,6 +211,7 @@ impl IndirectPass {
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
+            chunks: azimuth_chunks(push.sample_count, ladder, INDIRECT_SAMPLE_BUDGET),
             push,
             shade_push: shade.push(),
         })
@@ -209,8 +230,13 @@ impl IndirectPass {
     pub fn record_scan(&self, rec: &mut Recorder) {
         rec.scope(STAGE_SCAN, |ctx, cmd| {
             let g = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
-            self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&self.push), g);
-            barrier::compute_to_compute(ctx, cmd);
+            // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into U.
+            for (i, (first, count)) in self.chunks.iter().enumerate() {
+                let flags = self.push.flags | if i > 0 { FLAG_ACCUMULATE } else { 0 };
+                let push = IndirectPush { sample_offset: *first, sample_count: *count, flags, ..self.push };
+                self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&push), g);
+                barrier::compute_to_compute(ctx, cmd);
+            }
         });
     }
 

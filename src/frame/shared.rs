@@ -28,6 +28,53 @@ pub struct PyramidPush {
     pub out_height: u32,
 }
 
+/// `HFGI_FLAG_RAW_LEVEL0` (glsl/inc/hfgi_pyramid.glsl): level 0 read as the bilinear surface.
+pub const FLAG_RAW_LEVEL0: u32 = 1;
+/// `HFGI_FLAG_HORIZON_SAMPLES`: `ω_max` is the largest blocking angle.
+pub const FLAG_HORIZON_SAMPLES: u32 = 2;
+/// `HFGI_FLAG_TANGENT`: `ω_min` is the exact tangent elevation.
+pub const FLAG_TANGENT: u32 = 4;
+
+/// `HFGI_FLAG_ACCUMULATE`: add to the output instead of overwriting it (azimuth chunks).
+pub const FLAG_ACCUMULATE: u32 = 8;
+
+/// Scan samples (azimuths × ladder length) one invocation of the visibility pass may run per
+/// dispatch. lavapipe silently ends an invocation's loops after 65535 iterations in total
+/// (docs/accuracy.md §1); 48² at `ultra` (128 azimuths × 146 samples = 18.7k) was measured
+/// intact.
+pub const VISIBILITY_SAMPLE_BUDGET: u32 = 8192;
+/// The same for the indirect scan, whose casting-set members cost more: 64 azimuths × 57 samples
+/// (3.6k) was measured intact, 128 × 130 (16.6k) lost most of its light.
+pub const INDIRECT_SAMPLE_BUDGET: u32 = 2048;
+
+/// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / ladder`
+/// samples each (at least one), one dispatch per chunk, the later ones accumulating.
+pub fn azimuth_chunks(count: u32, ladder: u32, budget: u32) -> Vec<(u32, u32)> {
+    let per = (budget / ladder.max(1)).max(1);
+    (0..count.div_ceil(per)).map(|c| (c * per, per.min(count - c * per))).collect()
+}
+
+/// The `FLAG_*` bits of a scene's accuracy settings (docs/accuracy.md §4).
+pub fn scan_flags(gi: &crate::scene::model::GiSettings) -> u32 {
+    use crate::scene::model::{Horizon, Level0, OmegaMin};
+    let mut f = 0;
+    if gi.level0 == Level0::Bilinear {
+        f |= FLAG_RAW_LEVEL0;
+    }
+    if gi.horizon == Horizon::Samples {
+        f |= FLAG_HORIZON_SAMPLES;
+    }
+    if gi.omega_min == OmegaMin::Tangent {
+        f |= FLAG_TANGENT;
+    }
+    f
+}
+
+/// `near_steps | far_steps << 16`: the scan samples before the ladder's first and past its last.
+pub fn scan_extent(gi: &crate::scene::model::GiSettings) -> u32 {
+    gi.near_steps | (gi.far_steps() << 16)
+}
+
 /// `hfgi_VisibilityPush`: push constants of the visibility pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -42,8 +89,10 @@ pub struct VisibilityPush {
     pub level_bias: u32,
     pub texel_size: f32,
     pub stack_mode: u32,
-    pub pad0: u32,
-    pub pad1: u32,
+    /// `FLAG_*` bits (docs/accuracy.md §4).
+    pub flags: u32,
+    /// `near_steps | far_steps << 16` ([`scan_extent`]).
+    pub scan_extent: u32,
 }
 
 /// `hfgi_ShadePush`: push constants of the direct shading pass.
@@ -88,9 +137,15 @@ pub struct IndirectPush {
     pub radiance_levels: u32,
     /// 1: the radiance pyramid is a stack (scalar mode with `gi.pyramid = stack`).
     pub radiance_stack: u32,
-    pub pad: [u32; 2],
+    /// `FLAG_*` bits (docs/accuracy.md §4).
+    pub flags: u32,
+    /// `near_steps | far_steps << 16` ([`scan_extent`]).
+    pub scan_extent: u32,
     /// Phong `k_s` (rgb, 0): the vector pyramid's glossy lobe.
     pub specular: [f32; 4],
+    /// First azimuth sample of this dispatch ([`azimuth_chunks`]).
+    pub sample_offset: u32,
+    pub pad: [u32; 3],
 }
 
 /// `hfgi_GatherPush`: push constants of `radiance.gather`.
@@ -110,7 +165,10 @@ pub struct GatherPush {
     pub pad: [u32; 2],
 }
 
-const _: () = assert!(std::mem::size_of::<IndirectPush>() == 64);
+const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
+const _: () = assert!(std::mem::offset_of!(IndirectPush, specular) == 48);
+const _: () = assert!(std::mem::offset_of!(IndirectPush, sample_offset) == 64);
+const _: () = assert!(std::mem::offset_of!(VisibilityPush, flags) == 40);
 const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
 
 /// `hfgi_ViewPush`: push constants of the view raster pass (vertex stage).

@@ -10,9 +10,10 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
-use super::shared::VisibilityPush;
+use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, VISIBILITY_SAMPLE_BUDGET};
 use crate::error::Result;
 use crate::math::azimuth::{self, AzimuthSet};
+use crate::math::elevation;
 use crate::scene::model::{PyramidMode, Scene};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -59,9 +60,13 @@ pub struct VisibilityPass {
     samples: Buffer,
     fold: Buffer,
     vis: Buffer,
+    /// `math::elevation::fourier_table(n)` (read only with the legendre basis).
+    elev: Buffer,
     sets: Vec<SetRange>,
     n: usize,
     push: VisibilityPush,
+    /// Scan samples per azimuth (the ladder's length), for the azimuth chunks.
+    ladder: u32,
 }
 
 impl VisibilityPass {
@@ -75,12 +80,13 @@ impl VisibilityPass {
         let mut samples: Vec<[f32; 4]> = Vec::new();
         let mut fold: Vec<f32> = Vec::new();
         let mut sets = Vec::new();
+        let elev: Vec<f32> = elevation::fourier_table(n).iter().map(|&v| v as f32).collect();
         for (kind, set) in &light_sets {
             let first = samples.len() as u32;
             for &phi in &set.phi {
                 samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
             }
-            for a in azimuth::fold(n, set, scene.gi.interpolation) {
+            for a in azimuth::fold(n, set, scene.gi.interpolation, scene.gi.elevation_basis) {
                 fold.extend(a.data.iter().map(|&v| v as f32));
             }
             sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
@@ -107,16 +113,28 @@ impl VisibilityPass {
                 MemoryLocation::GpuOnly,
             )?);
             parts.push(Buffer::new(ctx, "hfgi.visibility.v", vis_floats * 4, usage, MemoryLocation::GpuOnly)?);
+            parts.push(Buffer::new(
+                ctx,
+                "hfgi.visibility.elevation",
+                elev.len() as u64 * 4,
+                usage,
+                MemoryLocation::GpuOnly,
+            )?);
             if !samples.is_empty() {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
                 memory::upload_f32(ctx, &parts[1], 0, &fold)?;
             }
+            memory::upload_f32(ctx, &parts[3], 0, &elev)?;
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::VISIBILITY_VISIBILITY_COMP,
-                &[DescriptorKind::StorageBuffer; 6],
+                &[DescriptorKind::StorageBuffer; 7],
                 std::mem::size_of::<VisibilityPush>() as u32,
-                &[(0, n as u32), (1, pyramid.layout().count() as u32)],
+                &[
+                    (0, n as u32),
+                    (1, pyramid.layout().count() as u32),
+                    (2, elevation::size(scene.gi.elevation_basis, n) as u32),
+                ],
                 1,
             )?);
             let stack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
@@ -129,6 +147,7 @@ impl VisibilityPass {
                     Bind::Buffer(&parts[0]),
                     Bind::Buffer(&parts[1]),
                     Bind::Buffer(&parts[2]),
+                    Bind::Buffer(&parts[3]),
                 ],
             )
         })();
@@ -142,6 +161,7 @@ impl VisibilityPass {
                 return Err(e);
             }
         };
+        let elev_buf = parts.pop().expect("elevation");
         let vis = parts.pop().expect("v");
         let fold_buf = parts.pop().expect("fold");
         let samples_buf = parts.pop().expect("samples");
@@ -153,6 +173,8 @@ impl VisibilityPass {
             level_bias: scene.gi.level_step * scene.gi.level_offset,
             texel_size: scene.texel_size as f32,
             stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
+            flags: super::shared::scan_flags(&scene.gi),
+            scan_extent: super::shared::scan_extent(&scene.gi),
             ..Default::default()
         };
         Ok(Self {
@@ -161,9 +183,11 @@ impl VisibilityPass {
             samples: samples_buf,
             fold: fold_buf,
             vis,
+            elev: elev_buf,
             sets,
             n,
             push,
+            ladder: crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len() as u32,
         })
     }
 
@@ -187,13 +211,22 @@ impl VisibilityPass {
         }
         rec.scope(stage, |ctx, cmd| {
             for (i, s) in &chosen {
-                let push = VisibilityPush {
-                    sample_offset: s.first,
-                    sample_count: s.count,
-                    out_offset: *i as u32 * receivers * n2,
-                    ..self.push
-                };
-                self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
+                // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into V.
+                for (c, (first, count)) in
+                    azimuth_chunks(s.count, self.ladder, VISIBILITY_SAMPLE_BUDGET).iter().enumerate()
+                {
+                    if c > 0 {
+                        barrier::compute_to_compute(ctx, cmd);
+                    }
+                    let push = VisibilityPush {
+                        sample_offset: s.first + first,
+                        sample_count: *count,
+                        out_offset: *i as u32 * receivers * n2,
+                        flags: self.push.flags | if c > 0 { FLAG_ACCUMULATE } else { 0 },
+                        ..self.push
+                    };
+                    self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
+                }
             }
             barrier::compute_to_compute(ctx, cmd);
         });
@@ -218,7 +251,7 @@ impl VisibilityPass {
     }
     /// Bytes of GPU memory held.
     pub fn memory_bytes(&self) -> u64 {
-        self.samples.size + self.fold.size + self.vis.size
+        self.samples.size + self.fold.size + self.vis.size + self.elev.size
     }
 
     pub fn destroy(mut self, ctx: &Context) {
@@ -226,5 +259,6 @@ impl VisibilityPass {
         self.samples.destroy(ctx);
         self.fold.destroy(ctx);
         self.vis.destroy(ctx);
+        self.elev.destroy(ctx);
     }
 }

@@ -5,8 +5,8 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use super::sh;
-use super::wedge::{m_bspl, m_lin, Mat};
-use crate::scene::model::{Interpolation, KeyLight};
+use super::wedge::{m_bspl, m_lin, wedge_matrix_legendre, Mat};
+use crate::scene::model::{ElevationBasis, Interpolation, KeyLight};
 
 /// One azimuthal wedge: it starts at `start`, spans `width` and reads the NLP vectors of
 /// `samples` (2 for linear: j, j+1; 4 for B-spline: j−1 … j+2), already wrapped (complete
@@ -82,22 +82,24 @@ pub fn key_light_set(light: &KeyLight, k: usize, interp: Interpolation) -> Azimu
     AzimuthSet { phi, lo, hi, wedges, complete: false }
 }
 
-fn matrix(n: usize, width: f64, interp: Interpolation) -> Mat {
-    match interp {
-        Interpolation::Linear => m_lin(n, width),
-        Interpolation::Bspline => m_bspl(n, width),
+fn matrix(n: usize, width: f64, interp: Interpolation, basis: ElevationBasis) -> Mat {
+    match (basis, interp) {
+        (ElevationBasis::Nlp, Interpolation::Linear) => m_lin(n, width),
+        (ElevationBasis::Nlp, Interpolation::Bspline) => m_bspl(n, width),
+        (ElevationBasis::Legendre, i) => wedge_matrix_legendre(n, width, i),
     }
 }
 
-/// The wedge matrix (`M_lin` or `M_bspl`) of every wedge of `set`, computed once per width.
-pub fn wedge_matrices(n: usize, set: &AzimuthSet, interp: Interpolation) -> Vec<Mat> {
+/// The wedge matrix (`M_lin` or `M_bspl`, or their `legendre`-basis counterparts) of every wedge
+/// of `set`, computed once per width.
+pub fn wedge_matrices(n: usize, set: &AzimuthSet, interp: Interpolation, basis: ElevationBasis) -> Vec<Mat> {
     let mut cache: Vec<(f64, Mat)> = Vec::new();
     set.wedges
         .iter()
         .map(|w| match cache.iter().find(|(width, _)| *width == w.width) {
             Some((_, m)) => m.clone(),
             None => {
-                let m = matrix(n, w.width, interp);
+                let m = matrix(n, w.width, interp, basis);
                 cache.push((w.width, m.clone()));
                 m
             }
@@ -124,16 +126,22 @@ pub fn accumulate_with(n: usize, set: &AzimuthSet, mats: &[Mat], v: &[Vec<f64>])
 }
 
 /// [`accumulate_with`] computing the wedge matrices itself.
-pub fn accumulate(n: usize, set: &AzimuthSet, interp: Interpolation, v: &[Vec<f64>]) -> Vec<f64> {
-    accumulate_with(n, set, &wedge_matrices(n, set, interp), v)
+pub fn accumulate(
+    n: usize,
+    set: &AzimuthSet,
+    interp: Interpolation,
+    basis: ElevationBasis,
+    v: &[Vec<f64>],
+) -> Vec<f64> {
+    accumulate_with(n, set, &wedge_matrices(n, set, interp, basis), v)
 }
 
-/// The `n² × n` matrix of `Rot_z(·, α)` acting on a vector `x` that is the SH projection of
-/// column block `b`: returns `R(α) · M[:, b·n .. (b+1)·n]`.
-fn rotated_block(n: usize, m: &Mat, block: usize, alpha: f64) -> Mat {
-    let mut out = Mat::zeros(n * n, n);
-    for c in 0..n {
-        let col: Vec<f64> = (0..n * n).map(|r| m.get(r, block * n + c)).collect();
+/// The `n² × e` matrix of `Rot_z(·, α)` acting on a vector `x` that is the SH projection of
+/// column block `b` (`e` values per sample): returns `R(α) · M[:, b·e .. (b+1)·e]`.
+fn rotated_block(n: usize, e: usize, m: &Mat, block: usize, alpha: f64) -> Mat {
+    let mut out = Mat::zeros(n * n, e);
+    for c in 0..e {
+        let col: Vec<f64> = (0..n * n).map(|r| m.get(r, block * e + c)).collect();
         for (r, v) in sh::rotate_z(n, &col, alpha).into_iter().enumerate() {
             out.set(r, c, v);
         }
@@ -141,13 +149,15 @@ fn rotated_block(n: usize, m: &Mat, block: usize, alpha: f64) -> Mat {
     out
 }
 
-/// Folds the wedges into one `n² × n` matrix per sample, `A_j`, so that
-/// `Σ_j A_j v_j == accumulate(n, set, interp, v)` (docs/direct.md §4, "Folding").
-pub fn fold(n: usize, set: &AzimuthSet, interp: Interpolation) -> Vec<Mat> {
-    let mut a: Vec<Mat> = (0..set.phi.len()).map(|_| Mat::zeros(n * n, n)).collect();
-    for (w, m) in set.wedges.iter().zip(wedge_matrices(n, set, interp)) {
+/// Folds the wedges into one `n² × e` matrix per sample, `A_j` (`e` = the basis size,
+/// [`crate::math::elevation::size`]), so that `Σ_j A_j v_j == accumulate(n, set, interp, basis, v)`
+/// (docs/direct.md §4, "Folding").
+pub fn fold(n: usize, set: &AzimuthSet, interp: Interpolation, basis: ElevationBasis) -> Vec<Mat> {
+    let e = super::elevation::size(basis, n);
+    let mut a: Vec<Mat> = (0..set.phi.len()).map(|_| Mat::zeros(n * n, e)).collect();
+    for (w, m) in set.wedges.iter().zip(wedge_matrices(n, set, interp, basis)) {
         for (block, &s) in w.samples.iter().enumerate() {
-            let r = rotated_block(n, &m, block, w.start);
+            let r = rotated_block(n, e, &m, block, w.start);
             for (dst, src) in a[s].data.iter_mut().zip(&r.data) {
                 *dst += src;
             }
@@ -161,8 +171,8 @@ mod tests {
     use super::*;
     use glam::DVec3;
 
-    fn vectors(n: usize, count: usize) -> Vec<Vec<f64>> {
-        (0..count).map(|j| (0..n).map(|l| ((j * 7 + l * 3) as f64 * 0.37).sin()).collect()).collect()
+    fn vectors(e: usize, count: usize) -> Vec<Vec<f64>> {
+        (0..count).map(|j| (0..e).map(|l| ((j * 7 + l * 3) as f64 * 0.37).sin()).collect()).collect()
     }
 
     #[test]
@@ -176,10 +186,11 @@ mod tests {
                 let mut sets = vec![environment_set(8, interp), environment_set(32, interp)];
                 sets.extend(lights.iter().map(|l| key_light_set(l, 3, interp)));
                 sets.push(key_light_set(&lights[0], 5, interp));
-                for set in &sets {
-                    let v = vectors(n, set.phi.len());
-                    let want = accumulate(n, set, interp, &v);
-                    let a = fold(n, set, interp);
+                for (set, basis) in sets.iter().flat_map(|s| [(s, ElevationBasis::Nlp), (s, ElevationBasis::Legendre)])
+                {
+                    let v = vectors(crate::math::elevation::size(basis, n), set.phi.len());
+                    let want = accumulate(n, set, interp, basis, &v);
+                    let a = fold(n, set, interp, basis);
                     let mut got = vec![0.0; n * n];
                     for (aj, vj) in a.iter().zip(&v) {
                         for (g, x) in got.iter_mut().zip(aj.mul_vec(vj)) {
@@ -190,6 +201,53 @@ mod tests {
                     assert!(err < 1e-12, "n={n} {interp} complete={}: {err:e}", set.complete);
                 }
             }
+        }
+    }
+
+    /// The `legendre` elevation basis gives the exact SH projection of azimuthally blended
+    /// visibility (checked against a brute-force quadrature over the sphere with `sh::eval`);
+    /// the NLP basis does not (its floor is printed).
+    #[test]
+    fn legendre_basis_projects_exactly() {
+        use crate::math::quadrature::gauss_legendre_on;
+        let n = 4;
+        for interp in [Interpolation::Linear, Interpolation::Bspline] {
+            let set = environment_set(8, interp);
+            let horizon: Vec<f64> = (0..8).map(|j| 0.9 * ((j * 5) as f64 * 0.7).sin() - 0.1).collect();
+            let brute = {
+                let mut v = vec![0.0; n * n];
+                for w in &set.wedges {
+                    let (phs, pws) = gauss_legendre_on(0.0, w.width, 24);
+                    for (&ph, &pw) in phs.iter().zip(&pws) {
+                        let a = ph / w.width;
+                        let beta: Vec<f64> = match interp {
+                            Interpolation::Linear => vec![1.0 - a, a],
+                            Interpolation::Bspline => crate::math::bspline::weights(a).to_vec(),
+                        };
+                        for (b, &s) in w.samples.iter().enumerate() {
+                            let (ws, wws) = gauss_legendre_on(horizon[s], FRAC_PI_2, 24);
+                            for (&om, &ow) in ws.iter().zip(&wws) {
+                                let phi = w.start + ph;
+                                let d = [om.cos() * phi.cos(), om.cos() * phi.sin(), om.sin()];
+                                for (o, y) in v.iter_mut().zip(sh::eval(n, d)) {
+                                    *o += pw * ow * om.cos() * beta[b] * y;
+                                }
+                            }
+                        }
+                    }
+                }
+                v
+            };
+            let err = |basis| {
+                let v: Vec<Vec<f64>> =
+                    horizon.iter().map(|&h| crate::math::elevation::interval(basis, n, h, FRAC_PI_2)).collect();
+                let got = accumulate(n, &set, interp, basis, &v);
+                got.iter().zip(&brute).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
+            };
+            let (exact, paper) = (err(ElevationBasis::Legendre), err(ElevationBasis::Nlp));
+            eprintln!("{interp}: max |V − brute force|: legendre {exact:.1e}, nlp {paper:.1e}");
+            assert!(exact < 1e-11, "{interp}: legendre basis off by {exact:e}");
+            assert!(paper > 1e-4, "{interp}: the NLP floor should be visible here ({paper:e})");
         }
     }
 

@@ -7,6 +7,7 @@
 //! Height Fields", EGSR 2009.
 pub mod azimuth;
 pub mod bspline;
+pub mod elevation;
 pub mod legendre;
 pub mod nlp;
 pub mod quadrature;

@@ -94,6 +94,60 @@ pub(crate) fn phi_points(n: usize, dphi: f64) -> usize {
     32 + (n as f64 * dphi.abs()).ceil() as usize
 }
 
+/// φ part of a wedge matrix: `f[(m + n − 1)·B + b] = ∫_0^{Δφ} β_b(φ/Δφ) trig(mφ) dφ`, trig = cos
+/// for `m ≥ 0`, `sin(|m|φ)` for `m < 0`.
+fn phi_part<const B: usize>(n: usize, dphi: f64, weights: &impl Fn(f64) -> [f64; B]) -> Vec<f64> {
+    let mut f = vec![0.0; (2 * n - 1) * B];
+    let (phs, pws) = gauss_legendre_on(0.0, dphi, phi_points(n, dphi));
+    for (&ph, &pw) in phs.iter().zip(&pws) {
+        let beta = weights(ph / dphi);
+        for m in 0..n {
+            let (s, c) = (m as f64 * ph).sin_cos();
+            for b in 0..B {
+                f[(m + n - 1) * B + b] += pw * beta[b] * c;
+                if m > 0 {
+                    f[(n - 1 - m) * B + b] += pw * beta[b] * s;
+                }
+            }
+        }
+    }
+    f
+}
+
+/// The wedge matrix of the `legendre` elevation basis ([`super::elevation`]): `n² × B·n(n+1)/2`,
+/// column block `b` multiplies the `e_lm` vector of sample `b` (linear: `j, j+1`; B-spline:
+/// `j−1 … j+2`); `M[(l,m)][(b, (l,|m|))] = N_l^{|m|} · F(m, b)` and zero elsewhere — the exact SH
+/// projection of the azimuthally blended indicators.
+pub fn wedge_matrix_legendre(n: usize, dphi: f64, interp: crate::scene::model::Interpolation) -> Mat {
+    match interp {
+        crate::scene::model::Interpolation::Linear => legendre_matrix(n, dphi, |a| [1.0 - a, a]),
+        crate::scene::model::Interpolation::Bspline => legendre_matrix(n, dphi, bspline::weights),
+    }
+}
+
+fn legendre_matrix<const B: usize>(n: usize, dphi: f64, weights: impl Fn(f64) -> [f64; B]) -> Mat {
+    check_order(n);
+    assert!(dphi.is_finite(), "wedge matrix: Δφ must be finite, got {dphi}");
+    let e = n * (n + 1) / 2;
+    let mut out = Mat::zeros(n * n, B * e);
+    if dphi == 0.0 {
+        return out;
+    }
+    let f = phi_part(n, dphi, &weights);
+    for l in 0..n {
+        let li = l as i32;
+        for mi in -li..=li {
+            let ma = mi.unsigned_abs() as usize;
+            let norm = super::elevation::sh_norm(l, ma);
+            let fm = &f[(mi + n as i32 - 1) as usize * B..(mi + n as i32) as usize * B];
+            for (b, &fb) in fm.iter().enumerate() {
+                out.set(sh::index(li, mi), b * e + super::elevation::index(l, ma), norm * fb);
+            }
+        }
+    }
+    out
+}
+
 fn wedge_matrix<const B: usize>(n: usize, dphi: f64, weights: impl Fn(f64) -> [f64; B]) -> Mat {
     check_order(n);
     assert!(dphi.is_finite(), "wedge matrix: Δφ must be finite, got {dphi}");
@@ -131,22 +185,7 @@ fn wedge_matrix<const B: usize>(n: usize, dphi: f64, weights: impl Fn(f64) -> [f
         }
     }
 
-    // φ part: f[(m + n − 1)*B + b] = ∫_0^{Δφ} β_b(φ/Δφ) trig(mφ) dφ, trig = cos for m ≥ 0,
-    // sin(|m|φ) for m < 0.
-    let mut f = vec![0.0; (2 * n - 1) * B];
-    let (phs, pws) = gauss_legendre_on(0.0, dphi, phi_points(n, dphi));
-    for (&ph, &pw) in phs.iter().zip(&pws) {
-        let beta = weights(ph / dphi);
-        for m in 0..n {
-            let (s, c) = (m as f64 * ph).sin_cos();
-            for b in 0..B {
-                f[(m + n - 1) * B + b] += pw * beta[b] * c;
-                if m > 0 {
-                    f[(n - 1 - m) * B + b] += pw * beta[b] * s;
-                }
-            }
-        }
-    }
+    let f = phi_part(n, dphi, &weights);
 
     for l in 0..n {
         let li = l as i32;

@@ -13,8 +13,8 @@ use crate::frame::shade::set_lighting;
 use crate::frame::visibility::{light_sets, SetKind};
 use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
 use crate::math::Mat;
-use crate::math::{nlp, triple, zh};
-use crate::scene::model::{Albedo, PyramidMode, Scene};
+use crate::math::{elevation, triple, zh};
+use crate::scene::model::{Albedo, ElevationBasis, GiSettings, Horizon, Level0, PyramidMode, Scene};
 
 /// Tolerance (texels) of the domain test of docs/direct.md §2.
 pub const EDGE_TOL: f64 = 1e-3;
@@ -38,25 +38,72 @@ pub struct DirectOutput {
     pub incident: Vec<Vec<[f64; 3]>>,
 }
 
-/// Scan parameters shared by every receiver (docs/direct.md §2).
+/// Scan parameters shared by every receiver (docs/direct.md §2, docs/accuracy.md §4).
 pub struct Scan<'a> {
     pub pyr: &'a CpuPyramid,
     pub k_v: u32,
     pub o_v: u32,
     pub texel_size: f64,
     pub wrap: bool,
+    /// `gi.level0 = "bilinear"`: level 0 read as the bilinear surface of the samples.
+    pub raw0: bool,
+    /// `gi.horizon = "samples"`: `ω_max` is the largest blocking angle.
+    pub horizon_samples: bool,
+    /// Samples before the ladder's first (`gi.near_steps`) and past its last.
+    pub near: usize,
+    pub far: usize,
+    /// Elevation basis of the per-azimuth vectors (`gi.elevation_basis`).
+    pub basis: ElevationBasis,
 }
 
-impl Scan<'_> {
-    /// `ω_max` of eq. 17 at level-0 position `p` along azimuth `phi`.
+impl<'a> Scan<'a> {
+    /// The scan of `gi` over `pyr`.
+    pub fn new(pyr: &'a CpuPyramid, gi: &GiSettings, texel_size: f64, wrap: bool) -> Self {
+        Self {
+            pyr,
+            k_v: gi.level_step,
+            o_v: gi.level_offset,
+            texel_size,
+            wrap,
+            raw0: gi.level0 == Level0::Bilinear,
+            horizon_samples: gi.horizon == Horizon::Samples,
+            near: gi.near_steps as usize,
+            far: gi.far_steps() as usize,
+            basis: gi.elevation_basis,
+        }
+    }
+
+    /// Height at pyramid level `level`, level-0 position `(x, y)`, as the scan reads it.
+    fn height(&self, level: usize, x: f64, y: f64) -> f64 {
+        if self.raw0 && level == 0 {
+            self.pyr.sample_raw(0, x, y)
+        } else {
+            self.pyr.height_at(level, x, y)
+        }
+    }
+
+    /// `ω_max` at level-0 position `p` along azimuth `phi`: the largest blocking angle, or
+    /// eq. 17's spline maximum through the ladder's `n_v` samples (and the largest extra one).
     pub fn omega_max(&self, p: [f64; 2], phi: f64) -> f64 {
-        let omega: Vec<f64> = self.samples(p, phi).map(|(_, _, omega)| omega).collect();
-        bspline_max(&omega)
+        let n_v = self.pyr.layout.count();
+        let mut ladder = Vec::new();
+        let mut extra = -FRAC_PI_2;
+        for (idx, _, omega) in self.samples(p, phi) {
+            let i = idx as i64 - self.near as i64;
+            if self.horizon_samples || i < 0 || i >= n_v as i64 {
+                extra = extra.max(omega);
+            } else {
+                ladder.push(omega);
+            }
+        }
+        extra.max(bspline_max(&ladder))
     }
 
     /// The valid samples of the scan from level-0 position `p` along azimuth `phi`, in order:
-    /// `(i, q_i, ω_i)` with `t_i` of eq. 14 in texels, the level offset of §5.2 and `ω_i` of
-    /// eq. 15; the scan ends at the first sample outside the domain (no wrap, docs/direct.md §2).
+    /// `(idx, q, ω)`, `idx` the position in the ladder (sample `i = idx − near`), `t_i` of eq. 14
+    /// in texels (`i < 0` inside the first texel, `i ≥ n_v` past `max(W, H)`), the level offset
+    /// of §5.2 and `ω_i` of eq. 15; the scan ends at the first sample outside the domain (no
+    /// wrap, docs/direct.md §2).
     pub fn samples(&self, p: [f64; 2], phi: f64) -> impl Iterator<Item = (usize, [f64; 2], f64)> + '_ {
         let layout = &self.pyr.layout;
         let n_v = layout.count();
@@ -64,27 +111,36 @@ impl Scan<'_> {
         let (w, h) = (l0.width as f64, l0.height as f64);
         let big_n = w.max(h);
         let (dx, dy) = (phi.cos(), phi.sin());
-        (0..n_v)
-            .map(move |i| {
-                let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / self.k_v as f64);
-                (i, t, [p[0] + t * dx, p[1] + t * dy])
+        let near = self.near as i64;
+        (0..self.near + n_v + self.far)
+            .map(move |idx| {
+                let i = idx as i64 - near;
+                let t = big_n * 2f64.powf(-((n_v as i64 - 1 - i) as f64) / self.k_v as f64);
+                (idx, i, t, [p[0] + t * dx, p[1] + t * dy])
             })
-            .take_while(move |(_, _, q)| {
+            .take_while(move |(_, _, _, q)| {
                 self.wrap
                     || !(q[0] < -EDGE_TOL || q[1] < -EDGE_TOL || q[0] > w - 1.0 + EDGE_TOL || q[1] > h - 1.0 + EDGE_TOL)
             })
-            .map(move |(i, t, q)| {
-                let level = scan_level(i, self.k_v, self.o_v);
-                let dh = self.pyr.height_at(level, q[0], q[1]) - self.pyr.height_at(level, p[0], p[1]);
-                (i, q, (dh / (t * self.texel_size)).atan())
+            .map(move |(idx, i, t, q)| {
+                let level = scan_level(i, self.k_v, self.o_v, n_v);
+                let dh = self.height(level, q[0], q[1]) - self.height(level, p[0], p[1]);
+                (idx, q, (dh / (t * self.texel_size)).atan())
             })
     }
 }
 
 /// Pyramid level read by scan sample `i` (§5.2 level offset, docs/direct.md §2): the level
-/// whose texel matches the step, `k·o` levels finer, `max(i − k·o, 0)`.
-pub fn scan_level(i: usize, k_v: u32, o_v: u32) -> usize {
-    i.saturating_sub((k_v * o_v) as usize)
+/// whose texel matches the step, `k·o` levels finer, `clamp(i − k·o, 0, n_v − 1)`.
+pub fn scan_level(i: i64, k_v: u32, o_v: u32, n_v: usize) -> usize {
+    (i - (k_v * o_v) as i64).clamp(0, n_v as i64 - 1) as usize
+}
+
+/// The steps `τ_i = 2^(−(n_v−1−i)/k)` (units of `max(W, H)`) of every scan sample of `gi` over a
+/// pyramid of `n_v` levels, in ladder order from `i = −near_steps`.
+pub fn scan_steps(gi: &GiSettings, n_v: usize) -> Vec<f64> {
+    let (near, far) = (gi.near_steps as i64, gi.far_steps() as i64);
+    (-near..n_v as i64 + far).map(|i| 2f64.powf(-((n_v as i64 - 1 - i) as f64) / gi.level_step as f64)).collect()
 }
 
 /// Maximum of the uniform cubic B-spline through `omega` at knots and mid-points, ends
@@ -110,7 +166,7 @@ pub fn visibility_at(scan: &Scan, n: usize, set: &AzimuthSet, mats: &[Mat], p: [
         .iter()
         .map(|&phi| {
             let wmax = scan.omega_max(p, phi);
-            nlp::interval(n, wmax.max(set.lo), set.hi)
+            elevation::interval(scan.basis, n, wmax.max(set.lo), set.hi)
         })
         .collect();
     accumulate_with(n, set, mats, &v)
@@ -218,15 +274,14 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
     let z0 = crate::frame::renderer::height_origin(&scene.field);
     let stack = gi.pyramid == PyramidMode::Stack;
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
-    let scan =
-        Scan { pyr: &pyr, k_v: gi.level_step, o_v: gi.level_offset, texel_size: scene.texel_size, wrap: scene.wrap };
+    let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let sets = light_sets(scene);
 
     // Visibility at every receiver of the working grid (§1–4).
     let visibility: Vec<Vec<Vec<f64>>> = sets
         .iter()
         .map(|(_, set)| {
-            let mats = wedge_matrices(n, set, gi.interpolation);
+            let mats = wedge_matrices(n, set, gi.interpolation, gi.elevation_basis);
             (0..work.0 * work.1)
                 .map(|r| {
                     let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];

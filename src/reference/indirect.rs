@@ -2,12 +2,12 @@
 //! radiance pyramid of the previous bounce (§5.3), casting-set scan with eq. 6 and eq. 12,
 //! wedges with `M_lin`/`M_bspl` and `Rot_z` (eq. 19–21), shading with the BRDF lobes (§7).
 
-use super::direct::{interpolate, normals, render_direct, DirectOutput, Lobes, Scan};
+use super::direct::{interpolate, normals, render_direct, scan_steps, DirectOutput, Lobes, Scan};
 use super::pyramid::{rescale, CpuPyramid};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
-use crate::math::{nlp, zh};
-use crate::scene::model::{PyramidMode, Scene};
+use crate::math::{elevation, zh};
+use crate::scene::model::{Level0, OmegaMin, PyramidMode, Scene};
 use glam::DVec3;
 
 /// Direct and indirect results of the whole pipeline.
@@ -71,17 +71,21 @@ pub fn scan_radiance(
     p: [f64; 2],
     phi: f64,
     normal: [f64; 3],
+    tangent: bool,
     radiance: &mut dyn FnMut(usize, [f64; 2], f64) -> [f64; 3],
 ) -> [Vec<f64>; 3] {
     let (dx, dy) = (phi.cos(), phi.sin());
-    // ω_min: the receiver's tangent plane along φ (§3).
-    let omega_min = -(normal[0] * dx + normal[1] * dy).clamp(-1.0, 1.0).asin();
-    let mut u = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    // ω_min: the receiver's tangent plane along φ (§3): −asin(N·d), or the exact tangent
+    // elevation atan2(−N·d, N_z) (CONVENTIONS.md, docs/accuracy.md §4).
+    let nd = normal[0] * dx + normal[1] * dy;
+    let omega_min = if tangent { (-nd).atan2(normal[2]) } else { -nd.clamp(-1.0, 1.0).asin() };
+    let e = elevation::size(scan.basis, n);
+    let mut u = [vec![0.0; e], vec![0.0; e], vec![0.0; e]];
     let mut running = omega_min;
     for (i, q, omega) in scan.samples(p, phi) {
         if omega > running {
             // Casting-set member (eq. 6): it is seen over [running, ω); eq. 12 telescoped.
-            let seg = nlp::interval(n, running, omega);
+            let seg = elevation::interval(scan.basis, n, running, omega);
             let rad = radiance(i, q, omega);
             for (c, uc) in u.iter_mut().enumerate() {
                 for (a, b) in uc.iter_mut().zip(&seg) {
@@ -100,6 +104,19 @@ pub fn scan_radiance(
 struct RadianceSource {
     channels: Vec<CpuPyramid>,
     levels: Vec<usize>,
+    /// `gi.level0 = "bilinear"`: level 0 is the unfiltered image.
+    raw0: bool,
+}
+
+impl RadianceSource {
+    fn at(&self, channel: usize, level: usize, q: [f64; 2]) -> f64 {
+        let c = &self.channels[channel];
+        if self.raw0 && level == 0 {
+            c.sample_raw(0, q[0], q[1])
+        } else {
+            c.height_at(level, q[0], q[1])
+        }
+    }
 }
 
 /// Exit radiance of the casting point `q` toward the receiver (direction of elevation `ω`
@@ -114,7 +131,7 @@ fn member_radiance(
     phi: f64,
 ) -> [f64; 3] {
     let level = src.levels[i];
-    let mut rad = [0, 1, 2].map(|c| src.channels[c].height_at(level, q[0], q[1]));
+    let mut rad = [0, 1, 2].map(|c| src.at(c, level, q));
     if src.channels.len() > 3 {
         let n = scene.gi.sh_order;
         let ks = scene.material.specular.unwrap_or([0.0; 3]);
@@ -125,7 +142,7 @@ fn member_radiance(
         let lobe = zh::rotate(n, phong, r.to_array());
         for (k, l) in lobe.iter().enumerate() {
             for (c, v) in rad.iter_mut().enumerate() {
-                *v += ks[c] as f64 * l * src.channels[3 + 3 * k + c].height_at(level, q[0], q[1]);
+                *v += ks[c] as f64 * l * src.at(3 + 3 * k + c, level, q);
             }
         }
     }
@@ -142,10 +159,10 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let stack = gi.pyramid == PyramidMode::Stack;
     let z0 = crate::frame::renderer::height_origin(&scene.field);
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
-    let scan =
-        Scan { pyr: &pyr, k_v: gi.level_step, o_v: gi.level_offset, texel_size: scene.texel_size, wrap: scene.wrap };
+    let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
+    let tangent = gi.omega_min == OmegaMin::Tangent;
     let set = environment_set(gi.azimuths as usize, gi.interpolation);
-    let mats = wedge_matrices(n, &set, gi.interpolation);
+    let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
     let lobes = Lobes::new(scene);
     let nrm = normals(scene);
     let n_v = pyr.layout.count();
@@ -181,13 +198,11 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
             .map(|data| CpuPyramid::build_f64(data, (w, h), work, gi.radiance_level_step, scene.wrap, mode_stack))
             .collect::<Result<_>>()?;
         let n_u = channels[0].layout.count();
-        let levels: Vec<usize> = (0..n_v)
-            .map(|i| {
-                let t = big_n * 2f64.powf(-((n_v - 1 - i) as f64) / gi.level_step as f64);
-                radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u)
-            })
+        let levels: Vec<usize> = scan_steps(gi, n_v)
+            .into_iter()
+            .map(|tau| radiance_level(big_n * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u))
             .collect();
-        let src = RadianceSource { channels, levels };
+        let src = RadianceSource { channels, levels, raw0: gi.level0 == Level0::Bilinear };
         // U at every receiver, per channel (eq. 19–21).
         let u_grid: Vec<[Vec<f64>; 3]> = (0..work.0 * work.1)
             .map(|r| {
@@ -198,7 +213,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
                     .iter()
                     .map(|&phi| {
                         let mut rad = |i, q, omega| member_radiance(scene, &src, &lobes.phong, i, q, omega, phi);
-                        scan_radiance(&scan, n, p, phi, normal, &mut rad)
+                        scan_radiance(&scan, n, p, phi, normal, tangent, &mut rad)
                     })
                     .collect();
                 [0, 1, 2].map(|c| {

@@ -157,6 +157,17 @@ impl CpuPyramid {
         self.stack.as_ref().map(|s| bilinear(&s[i], ww, wh, xw, yw, self.wrap))
     }
 
+    /// Level `i` unfiltered: bilinear on its texels at `(x, y)` in level-0 texel units
+    /// (`gi.level0 = "bilinear"` reads level 0 this way).
+    pub fn sample_raw(&self, i: usize, x: f64, y: f64) -> f64 {
+        let l0 = self.layout.levels[0];
+        let l = self.layout.levels[i];
+        let (w, h) = (l.width as usize, l.height as usize);
+        let lx = rescale(x, l0.width as usize, w);
+        let ly = rescale(y, l0.height as usize, h);
+        bilinear(&self.levels[i], w, h, lx, ly, self.wrap)
+    }
+
     /// Height at level `i`, `(x, y)` in level-0 texel units, as the scanning passes read it:
     /// the stack when it was built, the B-spline on the fly otherwise.
     pub fn height_at(&self, i: usize, x: f64, y: f64) -> f64 {

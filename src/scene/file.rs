@@ -36,7 +36,8 @@ use crate::scene::generators::Generator;
 use crate::scene::heightfield::DEFAULT_MAX_DIM;
 use crate::scene::load::{load_heightfield, LoadOptions};
 use crate::scene::model::{
-    Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Scene,
+    Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Quality,
+    Scene,
 };
 use crate::scene::HeightField;
 
@@ -162,6 +163,7 @@ struct RawHeightfield {
     raw_size: Option<SizeSpec>,
     texel_size: Option<f64>,
     height_scale: Option<f64>,
+    height_offset: Option<f64>,
     wrap: Option<bool>,
 }
 
@@ -209,6 +211,13 @@ struct RawGi {
     radiance_level_offset: Option<u32>,
     amortize: Option<bool>,
     glossy_pyramid: Option<String>,
+    quality: Option<String>,
+    level0: Option<String>,
+    horizon: Option<String>,
+    near_steps: Option<u32>,
+    scan_reach: Option<String>,
+    omega_min: Option<String>,
+    elevation_basis: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -575,6 +584,15 @@ impl Ctx<'_> {
                 }
             }
         };
+        let field = match raw.height_offset {
+            None => field,
+            Some(z) => {
+                self.finite_f32("heightfield.height_offset", z, true, "a finite number (world units)")?;
+                let data: Vec<f32> = field.data().iter().map(|&v| (v as f64 + z) as f32).collect();
+                HeightField::new("height_offset", field.width(), field.height(), data, DEFAULT_MAX_DIM)
+                    .map_err(|e| self.wrap("heightfield.height_offset", e))?
+            }
+        };
         Ok((field, texel, raw.wrap.unwrap_or(false)))
     }
 
@@ -755,8 +773,12 @@ impl Ctx<'_> {
 
     fn gi(&self, t: Option<&Table>) -> Result<GiSettings> {
         let raw: RawGi = self.de_opt(t, "gi")?;
-        let d = GiSettings::default();
         let param = |e: Error| self.wrap("gi", e);
+        fn parse_opt<T: std::str::FromStr<Err = Error>>(v: &Option<String>) -> Result<Option<T>> {
+            v.as_deref().map(str::parse).transpose()
+        }
+        // The preset first; every explicit knob overrides it.
+        let d = GiSettings::preset(parse_opt(&raw.quality).map_err(param)?.unwrap_or(Quality::Default));
         let gi = GiSettings {
             sh_order: raw.sh_order.map_or(d.sh_order, |v| v as usize),
             azimuths: raw.azimuths.unwrap_or(d.azimuths),
@@ -781,6 +803,13 @@ impl Ctx<'_> {
                 .transpose()
                 .map_err(param)?
                 .unwrap_or(d.glossy_pyramid),
+            quality: d.quality,
+            level0: parse_opt(&raw.level0).map_err(param)?.unwrap_or(d.level0),
+            horizon: parse_opt(&raw.horizon).map_err(param)?.unwrap_or(d.horizon),
+            near_steps: raw.near_steps.unwrap_or(d.near_steps),
+            scan_reach: parse_opt(&raw.scan_reach).map_err(param)?.unwrap_or(d.scan_reach),
+            omega_min: parse_opt(&raw.omega_min).map_err(param)?.unwrap_or(d.omega_min),
+            elevation_basis: parse_opt(&raw.elevation_basis).map_err(param)?.unwrap_or(d.elevation_basis),
         };
         gi.validate().map_err(param)?;
         Ok(gi)

@@ -125,11 +125,37 @@ pub enum Generator {
         /// Probability that a lot holds a building, in `[0, 1]`.
         density: f64,
     },
+    /// Terraces: the fbm of `seed` (4 octaves, first at 3 cycles across the width, heights within
+    /// `±amplitude·w`) rounded to `steps` levels, so that every level change is a one-texel cliff
+    /// (the sharpest edge a sampled field has). A hard case for pre-filtering.
+    ///
+    /// Defaults: `seed = 1`, `steps = 8`, `amplitude = 0.1` (fraction of the width).
+    Terraces {
+        /// Seed of the underlying fbm.
+        seed: u64,
+        /// Number of levels across the height range, `1..=4096`.
+        steps: u32,
+        /// Height range as a fraction of the width (finite).
+        amplitude: f64,
+    },
+    /// Thin spikes: `count` one-texel columns of seeded height in `[0.5, 1]·height·w` at seeded
+    /// texels over gentle fbm ground (`±height·w/20`). A hard case for the pyramid's filtering of
+    /// thin features.
+    ///
+    /// Defaults: `seed = 1`, `count = 48`, `height = 0.15` (fraction of the width).
+    Spikes {
+        /// Seed of the spike positions and heights.
+        seed: u64,
+        /// Number of spikes, `1..=4096`.
+        count: u32,
+        /// Tallest spike as a fraction of the width (finite, `> 0`).
+        height: f64,
+    },
 }
 
 /// Names accepted by [`Generator::default_for`] and [`Generator::from_str`].
 pub fn names() -> &'static [&'static str] {
-    &["fbm", "sines", "cones", "cliff", "craters", "city"]
+    &["fbm", "sines", "cones", "cliff", "craters", "city", "terraces", "spikes"]
 }
 
 impl Generator {
@@ -143,6 +169,8 @@ impl Generator {
             "cliff" => Generator::Cliff { height: 0.25, position: 0.5 },
             "craters" => Generator::Craters { seed: 1, count: 6, radius: 0.12, depth: 0.4, rim: 0.15 },
             "city" => Generator::City { seed: 1, blocks: 8, street: 0.25, height: 0.12, density: 0.85 },
+            "terraces" => Generator::Terraces { seed: 1, steps: 8, amplitude: 0.1 },
+            "spikes" => Generator::Spikes { seed: 1, count: 48, height: 0.15 },
             _ => return Err(Error::param("generator", format!("'{name}'"), format!("one of {}", names().join(", ")))),
         })
     }
@@ -156,6 +184,8 @@ impl Generator {
             Generator::Cliff { .. } => "cliff",
             Generator::Craters { .. } => "craters",
             Generator::City { .. } => "city",
+            Generator::Terraces { .. } => "terraces",
+            Generator::Spikes { .. } => "spikes",
         }
     }
 
@@ -199,6 +229,14 @@ impl Generator {
                 check(n, "street", street, (0.0..1.0).contains(&street), "a number in [0, 1)")?;
                 positive("height", height)?;
                 check(n, "density", density, (0.0..=1.0).contains(&density), "a number in [0, 1]")
+            }
+            Generator::Terraces { seed: _, steps, amplitude } => {
+                count("steps", steps, MAX_FEATURES)?;
+                finite("amplitude", amplitude)
+            }
+            Generator::Spikes { seed: _, count: c, height } => {
+                count("count", c, MAX_FEATURES)?;
+                positive("height", height)
             }
         }
     }
@@ -250,6 +288,32 @@ impl Generator {
                         .sum()
                 });
             }
+            Generator::Terraces { seed, steps, amplitude } => {
+                let octs: Vec<Octave> = (0..4).map(|k| Octave::new(seed, k, 3.0)).collect();
+                let total: f64 = octs.iter().map(|o| o.weight).sum();
+                let scale = amplitude * w / total;
+                let step = 2.0 * amplitude.abs() * w / f64::from(steps);
+                fill(&mut data, width, height, |x, y| {
+                    let f: f64 = octs.iter().map(|o| o.weight * o.sample(x / w, y / w)).sum::<f64>() * scale;
+                    if step > 0.0 {
+                        (f / step + 0.5).floor() * step
+                    } else {
+                        f
+                    }
+                });
+            }
+            Generator::Spikes { seed, count, height: tall } => {
+                let octs: Vec<Octave> = (0..3).map(|k| Octave::new(seed, k, 2.0)).collect();
+                let total: f64 = octs.iter().map(|o| o.weight).sum();
+                let scale = 0.05 * tall * w / total;
+                fill(&mut data, width, height, |x, y| {
+                    octs.iter().map(|o| o.weight * o.sample(x / w, y / w)).sum::<f64>() * scale
+                });
+                for (cx, cy, u) in feature_centres(seed, count, width, height) {
+                    let (i, j) = (cx.round() as usize, cy.round() as usize);
+                    data[j * width + i] += ((0.5 + 0.5 * u) * tall * w) as f32;
+                }
+            }
             Generator::City { seed, blocks, street, height: tall, density } => {
                 let pitch = (w / f64::from(blocks)).max(2.0);
                 let s = hash(seed, 0, 0, SALT_CITY);
@@ -295,6 +359,10 @@ impl fmt::Display for Generator {
             Generator::City { seed, blocks, street, height, density } => {
                 write!(f, "city:seed={seed},blocks={blocks},street={street},height={height},density={density}")
             }
+            Generator::Terraces { seed, steps, amplitude } => {
+                write!(f, "terraces:seed={seed},steps={steps},amplitude={amplitude}")
+            }
+            Generator::Spikes { seed, count, height } => write!(f, "spikes:seed={seed},count={count},height={height}"),
         }
     }
 }
@@ -349,6 +417,8 @@ impl Generator {
             Generator::Cliff { .. } => &["height", "position"],
             Generator::Craters { .. } => &["seed", "count", "radius", "depth", "rim"],
             Generator::City { .. } => &["seed", "blocks", "street", "height", "density"],
+            Generator::Terraces { .. } => &["seed", "steps", "amplitude"],
+            Generator::Spikes { .. } => &["seed", "count", "height"],
         }
     }
 
@@ -370,12 +440,16 @@ impl Generator {
             (Generator::Fbm { seed: s, .. }, "seed")
             | (Generator::Cones { seed: s, .. }, "seed")
             | (Generator::Craters { seed: s, .. }, "seed")
-            | (Generator::City { seed: s, .. }, "seed") => *s = seed(value)?,
+            | (Generator::City { seed: s, .. }, "seed")
+            | (Generator::Terraces { seed: s, .. }, "seed")
+            | (Generator::Spikes { seed: s, .. }, "seed") => *s = seed(value)?,
             (Generator::Fbm { octaves: c, .. }, "octaves")
             | (Generator::Sines { waves: c, .. }, "waves")
             | (Generator::Cones { count: c, .. }, "count")
             | (Generator::Craters { count: c, .. }, "count")
-            | (Generator::City { blocks: c, .. }, "blocks") => *c = int(value)?,
+            | (Generator::City { blocks: c, .. }, "blocks")
+            | (Generator::Terraces { steps: c, .. }, "steps")
+            | (Generator::Spikes { count: c, .. }, "count") => *c = int(value)?,
             (Generator::Fbm { frequency: x, .. }, "frequency")
             | (Generator::Fbm { amplitude: x, .. }, "amplitude")
             | (Generator::Sines { frequency: x, .. }, "frequency")
@@ -389,7 +463,9 @@ impl Generator {
             | (Generator::Craters { rim: x, .. }, "rim")
             | (Generator::City { street: x, .. }, "street")
             | (Generator::City { height: x, .. }, "height")
-            | (Generator::City { density: x, .. }, "density") => *x = real(value)?,
+            | (Generator::City { density: x, .. }, "density")
+            | (Generator::Terraces { amplitude: x, .. }, "amplitude")
+            | (Generator::Spikes { height: x, .. }, "height") => *x = real(value)?,
             (g, k) => {
                 return Err(Error::param(
                     format!("{n} parameter"),

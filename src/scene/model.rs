@@ -101,6 +101,97 @@ impl std::fmt::Display for GlossyPyramid {
     }
 }
 
+/// Declares a settings enum parsed from and printed as its TOML strings.
+macro_rules! settings_enum {
+    ($(#[$doc:meta])* $name:ident, $key:literal, $expected:literal, { $($(#[$vdoc:meta])* $var:ident = $text:literal),+ $(,)? }) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        pub enum $name {
+            $($(#[$vdoc])* $var),+
+        }
+        impl FromStr for $name {
+            type Err = Error;
+            fn from_str(s: &str) -> Result<Self> {
+                match s {
+                    $($text => Ok(Self::$var),)+
+                    _ => Err(Error::param($key, s, $expected)),
+                }
+            }
+        }
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(match self {
+                    $(Self::$var => $text),+
+                })
+            }
+        }
+    };
+}
+
+settings_enum!(
+    /// Quality preset (`gi.quality`, docs/accuracy.md §4): a ladder of every accuracy knob.
+    /// Explicit knobs override the preset's values.
+    Quality, "gi.quality", "`draft`, `default`, `high`, `ultra` or `paper`", {
+        Draft = "draft",
+        Default = "default",
+        High = "high",
+        Ultra = "ultra",
+        /// NS09 as published (§9 defaults, every accuracy fix off).
+        Paper = "paper",
+    }
+);
+
+settings_enum!(
+    /// What level 0 of the height and radiance pyramids is (`gi.level0`).
+    Level0, "gi.level0", "`bspline` or `bilinear`", {
+        /// The approximating cubic B-spline of the samples (the paper's: smooths a one-texel
+        /// cliff by a sixth of its height at top and foot).
+        Bspline = "bspline",
+        /// The bilinear surface of the samples themselves (CONVENTIONS.md's surface).
+        Bilinear = "bilinear",
+    }
+);
+
+settings_enum!(
+    /// How `ω_max` follows from the scan's blocking angles (`gi.horizon`).
+    Horizon, "gi.horizon", "`bspline` or `samples`", {
+        /// Maximum of the cubic B-spline through the `ω_i` (eq. 17; never above the largest sample).
+        Bspline = "bspline",
+        /// The largest `ω_i` (consistent with the casting set, which uses the raw `ω_i`).
+        Samples = "samples",
+    }
+);
+
+settings_enum!(
+    /// The far end of the scan ladder (`gi.scan_reach`).
+    ScanReach, "gi.scan_reach", "`side` or `diagonal`", {
+        /// `t ≤ max(W, H)` texels (the paper's ladder).
+        Side = "side",
+        /// `⌈k/2⌉` more samples, to `√2·max(W, H)`: diagonal rays reach the far corner.
+        Diagonal = "diagonal",
+    }
+);
+
+settings_enum!(
+    /// The per-azimuth elevation basis (`gi.elevation_basis`, `math::elevation`).
+    ElevationBasis, "gi.elevation_basis", "`nlp` or `legendre`", {
+        /// `n` normalised Legendre polynomial coefficients in `z = sin ω` (the paper's §4).
+        Nlp = "nlp",
+        /// The `n(n+1)/2` integrals of `P_l^m` over each elevation interval: exact SH projection.
+        Legendre = "legendre",
+    }
+);
+
+settings_enum!(
+    /// Lower end `ω_min` of the casting set (`gi.omega_min`).
+    OmegaMin, "gi.omega_min", "`asin` or `tangent`", {
+        /// `−asin(N · (cos φ, sin φ, 0))` (the paper's §3).
+        Asin = "asin",
+        /// The exact tangent elevation `atan2(−N·d, N_z)` (CONVENTIONS.md).
+        Tangent = "tangent",
+    }
+);
+
 /// Algorithm settings (`[gi]`). Defaults are the paper's (§9).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GiSettings {
@@ -129,24 +220,114 @@ pub struct GiSettings {
     pub amortize: bool,
     /// Glossy radiance pyramid (§5.3): scalar approximation or SH vector pyramid.
     pub glossy_pyramid: GlossyPyramid,
+    /// The preset the knobs below (and m, k, o, sub-sampling, radiance k_u, o_u) came from.
+    pub quality: Quality,
+    /// Level 0 of the pyramids: B-spline or the bilinear surface (docs/accuracy.md §4).
+    pub level0: Level0,
+    /// `ω_max` from the blocking angles: eq. 17's spline or the largest sample.
+    pub horizon: Horizon,
+    /// Scan samples inside the first texel, `t = 2^(−j/k)` for `j = 1..=near_steps`, 0..=64.
+    pub near_steps: u32,
+    /// Far end of the ladder.
+    pub scan_reach: ScanReach,
+    /// Lower end of the casting set.
+    pub omega_min: OmegaMin,
+    /// Elevation basis of the per-azimuth vectors.
+    pub elevation_basis: ElevationBasis,
 }
 
 impl Default for GiSettings {
+    /// The `default` preset.
     fn default() -> Self {
+        Self::preset(Quality::Default)
+    }
+}
+
+impl GiSettings {
+    /// The knobs of a quality preset (docs/accuracy.md §4 documents and measures the ladder).
+    /// Scene content (bounces, key-light azimuths, glossy pyramid, amortisation, the pyramid
+    /// mode) is not part of a preset; the SH order is (`high` and `ultra` use order 6, which
+    /// lowers the SH truncation floor against the exact reference; an order-4 environment is
+    /// used as given, its higher bands zero).
+    pub fn preset(q: Quality) -> Self {
+        // (n, m, k, o, sub-sampling, k_u, o_u, near steps)
+        let (n, m, k, o, sub, ku, ou, near) = match q {
+            Quality::Draft => (4, 16, 2, 2, 2, 2, 2, 2),
+            Quality::Default | Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 4),
+            Quality::High => (6, 64, 8, 4, 1, 8, 4, 16),
+            Quality::Ultra => (6, 128, 16, 8, 1, 16, 8, 48),
+        };
+        let paper = q == Quality::Paper;
         Self {
-            sh_order: 4,
-            azimuths: 32,
+            sh_order: n,
+            azimuths: m,
             key_light_azimuths: 3,
-            level_step: 4,
-            level_offset: 2,
-            subsample: 1,
+            level_step: k,
+            level_offset: o,
+            subsample: sub,
             interpolation: Interpolation::Linear,
             pyramid: PyramidMode::Stack,
             bounces: 0,
-            radiance_level_step: 4,
-            radiance_level_offset: 2,
+            radiance_level_step: ku,
+            radiance_level_offset: ou,
             amortize: true,
             glossy_pyramid: GlossyPyramid::Scalar,
+            quality: q,
+            level0: if paper { Level0::Bspline } else { Level0::Bilinear },
+            horizon: if paper { Horizon::Bspline } else { Horizon::Samples },
+            near_steps: if paper { 0 } else { near },
+            scan_reach: if paper { ScanReach::Side } else { ScanReach::Diagonal },
+            omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
+            elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
+        }
+    }
+
+    /// The knobs of preset `q` with this configuration's scene content (bounces, key-light
+    /// azimuths, pyramid mode, glossy pyramid, amortisation), which presets do not set.
+    pub fn with_quality(&self, q: Quality) -> GiSettings {
+        GiSettings {
+            bounces: self.bounces,
+            key_light_azimuths: self.key_light_azimuths,
+            pyramid: self.pyramid,
+            glossy_pyramid: self.glossy_pyramid,
+            amortize: self.amortize,
+            ..GiSettings::preset(q)
+        }
+    }
+
+    /// Every accuracy knob, resolved, on one line (`hfgi plan` and `hfgi bench` print it):
+    /// `quality=… sh_order=… azimuths=… level_step=… …`.
+    pub fn describe(&self) -> String {
+        format!(
+            "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
+             pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
+             scan_reach={} omega_min={} elevation_basis={} key_light_azimuths={} bounces={}",
+            self.quality,
+            self.sh_order,
+            self.azimuths,
+            self.level_step,
+            self.level_offset,
+            self.subsample,
+            self.interpolation,
+            self.pyramid,
+            self.radiance_level_step,
+            self.radiance_level_offset,
+            self.level0,
+            self.horizon,
+            self.near_steps,
+            self.scan_reach,
+            self.omega_min,
+            self.elevation_basis,
+            self.key_light_azimuths,
+            self.bounces
+        )
+    }
+
+    /// Scan samples past `t = max(W, H)` texels: `⌈k/2⌉` with [`ScanReach::Diagonal`].
+    pub fn far_steps(&self) -> u32 {
+        match self.scan_reach {
+            ScanReach::Side => 0,
+            ScanReach::Diagonal => self.level_step.div_ceil(2),
         }
     }
 }
@@ -266,6 +447,7 @@ impl GiSettings {
         check("gi.bounces", self.bounces, 0, 16)?;
         check("gi.radiance_level_step", self.radiance_level_step, 1, 16)?;
         check("gi.radiance_level_offset", self.radiance_level_offset, 0, 8)?;
+        check("gi.near_steps", self.near_steps, 0, 64)?;
         Ok(())
     }
 

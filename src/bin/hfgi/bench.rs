@@ -11,7 +11,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use hfgi::frame::Renderer;
 use hfgi::reference::truth::{TruthOutput, TruthSettings};
-use hfgi::scene::model::{GiSettings, Interpolation, PyramidMode, Scene};
+use hfgi::scene::model::{GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene};
 use hfgi::vk::{Context, Recorder, StageTimer};
 
 use super::{context, load_scene_or_default, plot, DeviceArgs};
@@ -21,9 +21,15 @@ pub struct BenchArgs {
     /// Scene files (comma-separated). Default: the default scene, craters and city blocks.
     #[arg(long, value_delimiter = ',', default_value = "scenes/default.toml,scenes/craters.toml,scenes/city.toml")]
     scenes: Vec<PathBuf>,
-    /// Field size (texels per side) the scenes are rendered at (heightfield.size).
-    #[arg(long, default_value_t = 64)]
-    size: u32,
+    /// Field size (texels per side) the scenes are rendered at (heightfield.size); 0 keeps each
+    /// scene's own size (e.g. the non-square scenes/hard/steep.toml). Default 128 (64 with --quick).
+    #[arg(long)]
+    size: Option<u32>,
+    /// What to sweep: `knobs` (one knob at a time around the scene's settings plus the m × k grid
+    /// of figure 10), `ablation` (the paper's settings, each accuracy fix of docs/accuracy.md §4
+    /// alone, all of them) or `presets` (gi.quality draft → ultra, and the paper).
+    #[arg(long, default_value = "knobs")]
+    sweep: Sweep,
     /// Override a setting of every scene, e.g. `--set gi.sh_order=4`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
@@ -49,6 +55,25 @@ pub struct BenchArgs {
     out: PathBuf,
     #[command(flatten)]
     device: DeviceArgs,
+}
+
+impl BenchArgs {
+    fn field_size(&self) -> u32 {
+        self.size.unwrap_or(if self.quick { 64 } else { 128 })
+    }
+    fn size_label(&self) -> String {
+        match self.field_size() {
+            0 => "each scene's own size".into(),
+            n => format!("{n}²"),
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Sweep {
+    Knobs,
+    Ablation,
+    Presets,
 }
 
 /// One configuration's measurements.
@@ -111,6 +136,34 @@ fn configs(base: &GiSettings, quick: bool) -> Vec<(String, GiSettings)> {
                 });
             }
         }
+    }
+    out
+}
+
+fn with_preset(scene: &GiSettings, preset: Quality) -> GiSettings {
+    scene.with_quality(preset)
+}
+
+/// The ablation of docs/accuracy.md §4: the paper, each fix alone on the paper's settings, all
+/// fixes (the `default` preset); then the preset ladder.
+fn ablation(base: &GiSettings, presets_only: bool) -> Vec<(String, GiSettings)> {
+    let paper = with_preset(base, Quality::Paper);
+    let mut out = vec![("paper".to_string(), paper.clone())];
+    if !presets_only {
+        let all = with_preset(base, Quality::Default);
+        let fix = |name: &str, f: &dyn Fn(&mut GiSettings)| {
+            let mut g = paper.clone();
+            f(&mut g);
+            (name.to_string(), g)
+        };
+        out.push(fix("level0=bilinear", &|g| g.level0 = all.level0));
+        out.push(fix("horizon=samples", &|g| g.horizon = all.horizon));
+        out.push(fix(&format!("near_steps={}", all.near_steps), &|g| g.near_steps = all.near_steps));
+        out.push(fix("scan_reach=diagonal", &|g| g.scan_reach = all.scan_reach));
+        out.push(fix("omega_min=tangent", &|g| g.omega_min = all.omega_min));
+    }
+    for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {
+        out.push((format!("quality={q}"), with_preset(base, q)));
     }
     out
 }
@@ -189,8 +242,13 @@ fn measure(ctx: &Context, scene: &Scene, frames: u32) -> Result<Measurement> {
 }
 
 fn settings_label(g: &GiSettings) -> String {
+    let fixes = if g.level0 == Level0::Bspline && g.near_steps == 0 && g.horizon == Horizon::Bspline {
+        String::new()
+    } else {
+        format!(" l0={} hz={} near={} reach={} ωmin={}", g.level0, g.horizon, g.near_steps, g.scan_reach, g.omega_min)
+    };
     format!(
-        "n={} m={} k={} o={} s={} {} {} b={}",
+        "n={} m={} k={} o={} s={} {} {} b={}{fixes}",
         g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
 }
@@ -205,13 +263,20 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let clock = if lavapipe { "lavapipe (CPU time, not a GPU time)" } else { "GPU timestamps" };
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     eprintln!(
-        "bench on {} ({}), {}×{} fields, {} timed frames per configuration",
-        info.name, info.driver, a.size, a.size, a.frames
+        "bench on {} ({}), {} fields, {} timed frames per configuration",
+        info.name,
+        info.driver,
+        a.size_label(),
+        a.frames
     );
     let mut rows: Vec<Row> = Vec::new();
     let mut references: Vec<(String, Option<f64>, Option<f64>)> = Vec::new();
+    let size = a.field_size();
     for path in &a.scenes {
-        let mut overrides = vec![format!("heightfield.size={}", a.size), format!("gi.bounces={}", a.bounces)];
+        let mut overrides = vec![format!("gi.bounces={}", a.bounces)];
+        if size > 0 {
+            overrides.push(format!("heightfield.size={size}"));
+        }
         overrides.extend(a.overrides.iter().cloned());
         let mut scene = load_scene_or_default(Some(path), &overrides)?;
         // The ground truth treats surfaces as diffuse: benchmark diffuse materials.
@@ -220,30 +285,48 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             scene.key_lights.clear();
         }
         let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-        let cfgs = configs(&scene.gi, a.quick);
+        let cfgs = match a.sweep {
+            Sweep::Knobs => configs(&scene.gi, a.quick),
+            Sweep::Ablation => ablation(&scene.gi, false),
+            Sweep::Presets => ablation(&scene.gi, true),
+        };
         let max_b = cfgs.iter().map(|(_, g)| g.bounces).max().unwrap_or(0);
-        let mut truth_scene = scene.clone();
-        truth_scene.gi.bounces = max_b;
-        let bar = indicatif::ProgressBar::new(cfgs.len() as u64 + 2);
+        let mut orders: Vec<usize> = cfgs.iter().map(|(_, g)| g.sh_order).collect();
+        orders.sort();
+        orders.dedup();
+        let bar = indicatif::ProgressBar::new(cfgs.len() as u64 + 2 * orders.len() as u64);
         if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} {wide_bar} {pos}/{len} [{elapsed} < {eta}]") {
             bar.set_style(style);
         }
-        bar.set_message(format!("{name}: references"));
-        let ts = TruthSettings { azimuths: a.reference_azimuths, ..Default::default() };
-        let (exact, exact_ms) = hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &ts, &mut |_, _| {})?;
-        bar.inc(1);
-        let shv_settings = TruthSettings { sh_visibility: true, ..ts };
-        let (shvis, shvis_ms) =
-            hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &shv_settings, &mut |_, _| {})?;
-        bar.inc(1);
-        references.push((name.clone(), exact_ms, shvis_ms));
+        // Both references at every SH order the configurations use (the SH-visibility one
+        // depends on it; so does the exact one when the lighting has more bands).
+        let mut truths = Vec::new();
+        for &n in &orders {
+            bar.set_message(format!("{name}: references at order {n}"));
+            let mut truth_scene = scene.clone();
+            truth_scene.gi.bounces = max_b;
+            truth_scene.gi.sh_order = n;
+            let ts = TruthSettings { azimuths: a.reference_azimuths, ..Default::default() };
+            let (exact, exact_ms) =
+                hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &ts, &mut |_, _| {})?;
+            bar.inc(1);
+            let shv_settings = TruthSettings { sh_visibility: true, ..ts };
+            let (shvis, shvis_ms) =
+                hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &shv_settings, &mut |_, _| {})?;
+            bar.inc(1);
+            if n == scene.gi.sh_order || (truths.is_empty() && !orders.contains(&scene.gi.sh_order)) {
+                references.push((name.clone(), exact_ms, shvis_ms));
+            }
+            truths.push((n, exact, shvis));
+        }
         for (knob, gi) in cfgs {
             bar.set_message(format!("{name}: {knob}"));
             let mut s = scene.clone();
             s.gi = gi.clone();
             s.gi.amortize = false;
             let (stages, memory, layers) = measure(&ctx, &s, a.frames).with_context(|| format!("{name}: {knob}"))?;
-            let (e, v) = (truth_layers(&exact, gi.bounces), truth_layers(&shvis, gi.bounces));
+            let (_, exact, shvis) = truths.iter().find(|(n, _, _)| *n == gi.sh_order).expect("reference");
+            let (e, v) = (truth_layers(exact, gi.bounces), truth_layers(shvis, gi.bounces));
             let got = [&layers.direct, &layers.indirect, &layers.total];
             let err = |r: &[Vec<[f64; 3]>; 3]| [0, 1, 2].map(|i| rel_l2(got[i], &r[i]));
             let total_ms = stages.iter().map(|(_, ms)| ms).sum();
@@ -267,14 +350,14 @@ fn write_outputs(
     // CSV: one row per configuration.
     let mut csv = String::from(
         "scene,knob,sh_order,azimuths,level_step,level_offset,subsample,interpolation,pyramid,bounces,total_ms,\
-         memory_bytes,exact_direct,exact_indirect,exact_total,shvis_direct,shvis_indirect,shvis_total,stages,device,driver\n",
+         memory_bytes,exact_direct,exact_indirect,exact_total,shvis_direct,shvis_indirect,shvis_total,stages,device,driver,knobs\n",
     );
     for r in rows {
         let g = &r.gi;
         let stages: Vec<String> = r.stages.iter().map(|(n, ms)| format!("{n}={ms:.4}")).collect();
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{},{},{},\"{}\",\"{}\"",
+            "{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{},{},{},\"{}\",\"{}\",\"{}\"",
             r.scene,
             r.knob,
             g.sh_order,
@@ -295,7 +378,8 @@ fn write_outputs(
             r.shvis[2],
             stages.join(";"),
             info.name,
-            info.driver
+            info.driver,
+            g.describe()
         );
     }
     let csv_path = a.out.join("results.csv");
@@ -305,8 +389,11 @@ fn write_outputs(
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "Device: {} ({}), times: {clock}, field {}², {} timed frames (median) after 1 warm-up.\n",
-        info.name, info.driver, a.size, a.frames
+        "Device: {} ({}), times: {clock}, field {}, {} timed frames (median) after 1 warm-up.\n",
+        info.name,
+        info.driver,
+        a.size_label(),
+        a.frames
     );
     for (scene, ex, sv) in references {
         let t = |v: &Option<f64>| v.map_or("no timestamps".into(), |ms| format!("{ms:.1} ms"));

@@ -1,6 +1,7 @@
 //! `hfgi` — command-line front end of the hfgi library.
 
 mod bench;
+mod export;
 mod plot;
 mod reference;
 
@@ -69,6 +70,10 @@ enum Command {
     /// references. Writes DIR/results.csv, DIR/results.md and DIR/pareto-<scene>.png (error
     /// against time, Pareto front marked). lavapipe times are labelled as CPU times.
     Bench(bench::BenchArgs),
+    /// Write a scene resolved to plain data for outside tools: DIR/heights.f32 (raw float32,
+    /// row-major, world units) and DIR/scene.toml (size, texel size, albedo, environment SH,
+    /// key lights, bounces). The Mitsuba 3 peer check (tools/mitsuba_check.py) reads it.
+    Export(export::ExportArgs),
     /// Print the passes and the stages a frame records, with the reason for each (no GPU).
     ///
     /// Plans the scene as `Renderer::new` and `Renderer::record` do (docs/plan.md) without
@@ -353,6 +358,7 @@ fn plan(a: PlanArgs) -> Result<()> {
         String::new()
     };
     println!("scene {name}: {w}×{h}, gi.bounces = {}, gi.amortize = {}{motion}", scene.gi.bounces, scene.gi.amortize);
+    println!("resolved knobs: {}", scene.gi.describe());
     let planner = hfgi::frame::Planner::new(&scene);
     for f in 0..u64::from(a.frames) {
         let p = planner.plan(&hfgi::frame::FrameState { heights_changed: f == 0 || animated, frame_index: f });
@@ -712,6 +718,7 @@ fn main() -> Result<()> {
         Command::Animate(a) => animate(a),
         Command::Reference(a) => reference::reference(a),
         Command::Bench(a) => bench::bench(a),
+        Command::Export(a) => export::export(a),
         Command::Plan(a) => plan(a),
         Command::Pyramid(a) => pyramid(a),
         Command::Devices => devices(),

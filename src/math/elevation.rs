@@ -1,0 +1,163 @@
+//! The elevation basis of the per-azimuth visibility and radiance vectors (docs/accuracy.md §4,
+//! candidate 5 of the accuracy issue).
+//!
+//! NS09 §4 keeps each azimuth's elevation function as `n` normalised-Legendre (NLP) coefficients
+//! in `z = sin ω` and maps them to SH through the wedge matrices (eq. 20). The SH functions of odd
+//! `m` contain `√(1 − z²)`, which no polynomial of degree `< n` represents, so the NLP step loses
+//! part of the exact order-`n` projection. The `legendre` basis keeps instead what the SH
+//! projection actually needs: for the indicator of an elevation interval `[a, b]`, the integrals
+//!
+//! `e_lm(a, b) = ∫_a^b P_l^m(sin ω) cos ω dω = ∫_{sin a}^{sin b} P_l^m(z) dz`, `0 ≤ m ≤ l < n`,
+//!
+//! `n(n+1)/2` numbers (10 at order 4). Since `y_l^{±m} = N_l^m P_l^m(cos θ) trig(mφ)`, the SH
+//! projection of a wedge whose elevation functions are such indicators, blended in azimuth, is
+//! exactly `N_l^m · F(m, b) · e_lm` (no elevation quadrature at all): the wedge matrices of this
+//! basis ([`wedge_matrix`]) have the same φ part as the NLP ones and an identity in elevation.
+//!
+//! On the GPU `e_lm` comes from a closed form: `g_lm(ω) = cos^{m+1}ω · P_l^{(m)}(sin ω)` equals
+//! `P_l^m(sin ω) cos ω` on `[−π/2, π/2]` and is a trigonometric polynomial of degree `≤ l + 1`,
+//! `g = c_0 + Σ_k (α_k cos kω + β_k sin kω)`; so
+//! `e_lm(a, b) = c_0 Δ + Σ_k (2/k) sin(kΔ/2) (α_k cos kμ + β_k sin kμ)`, `Δ = b − a`, `μ = (a+b)/2`,
+//! every term proportional to `sin(kΔ/2)`: a thin interval keeps its relative precision in f32.
+//! [`fourier_table`] holds the coefficients (`glsl/inc/hfgi_elevation.glsl` evaluates them).
+
+use std::f64::consts::{FRAC_PI_2, PI, SQRT_2};
+
+use super::quadrature::gauss_legendre_on;
+use super::{check_order, legendre, nlp, sh};
+use crate::scene::model::ElevationBasis;
+
+/// Number of values per azimuth: `n` (NLP) or `n(n+1)/2` (Legendre).
+pub fn size(basis: ElevationBasis, n: usize) -> usize {
+    match basis {
+        ElevationBasis::Nlp => n,
+        ElevationBasis::Legendre => n * (n + 1) / 2,
+    }
+}
+
+/// Index of `(l, m)`, `0 ≤ m ≤ l`, in a Legendre-basis vector.
+pub fn index(l: usize, m: usize) -> usize {
+    l * (l + 1) / 2 + m
+}
+
+/// The basis vector of the indicator of elevations `[lo, hi]` (clamped to `[−π/2, π/2]`; zero if
+/// `hi ≤ lo`): NLP coefficients ([`nlp::interval`]) or the integrals `e_lm(lo, hi)`.
+pub fn interval(basis: ElevationBasis, n: usize, lo: f64, hi: f64) -> Vec<f64> {
+    match basis {
+        ElevationBasis::Nlp => nlp::interval(n, lo, hi),
+        ElevationBasis::Legendre => legendre_interval(n, lo, hi),
+    }
+}
+
+/// `e_lm(lo, hi)` by Gauss–Legendre in `ω` on `[lo, hi]` (the integrand is a trigonometric
+/// polynomial of degree ≤ n; `2n + 12` points reach rounding level, checked in the tests).
+pub fn legendre_interval(n: usize, lo: f64, hi: f64) -> Vec<f64> {
+    check_order(n);
+    let (lo, hi) = (lo.clamp(-FRAC_PI_2, FRAC_PI_2), hi.clamp(-FRAC_PI_2, FRAC_PI_2));
+    let mut out = vec![0.0; n * (n + 1) / 2];
+    if hi <= lo {
+        return out;
+    }
+    let (ws, gw) = gauss_legendre_on(lo, hi, 2 * n + 12);
+    for (&w, &g) in ws.iter().zip(&gw) {
+        let (z, c) = w.sin_cos();
+        for l in 0..n {
+            for m in 0..=l {
+                out[index(l, m)] += g * c * legendre::assoc_legendre(l, m, z);
+            }
+        }
+    }
+    out
+}
+
+/// SH normalisation of `y_l^{±m}` without its trig factor: `K_l^0`, or `√2 K_l^m` for `m > 0`.
+pub fn sh_norm(l: usize, m: usize) -> f64 {
+    if m == 0 {
+        sh::k_lm(l, 0)
+    } else {
+        SQRT_2 * sh::k_lm(l, m)
+    }
+}
+
+/// Fourier coefficients of `g_lm(ω) = cos^{m+1}ω · P_l^{(m)}(sin ω)` for every `(l, m)` of order
+/// `n`: `n(n+1)/2` rows of `2n + 1` values `[c_0, α_1..α_n, β_1..β_n]` (row-major), computed by
+/// an exact discrete Fourier transform of the trigonometric polynomial.
+pub fn fourier_table(n: usize) -> Vec<f64> {
+    check_order(n);
+    let samples = 4 * n + 8;
+    let row = 2 * n + 1;
+    let mut out = vec![0.0; n * (n + 1) / 2 * row];
+    for l in 0..n {
+        for m in 0..=l {
+            let r = &mut out[index(l, m) * row..(index(l, m) + 1) * row];
+            for j in 0..samples {
+                let w = 2.0 * PI * (j as f64 + 0.3) / samples as f64;
+                let (z, c) = w.sin_cos();
+                // assoc_legendre is (1−z²)^{m/2} P^{(m)} = |cos ω|^m P^{(m)}; g needs cos^m ω.
+                let sign = if c < 0.0 && m % 2 == 1 { -1.0 } else { 1.0 };
+                let g = sign * c * legendre::assoc_legendre(l, m, z);
+                r[0] += g / samples as f64;
+                for k in 1..=n {
+                    let (s, ck) = (k as f64 * w).sin_cos();
+                    r[k] += 2.0 * g * ck / samples as f64;
+                    r[n + k] += 2.0 * g * s / samples as f64;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `e_lm(a, b)` from [`fourier_table`], the way the GPU evaluates it (for the tests).
+pub fn legendre_interval_fourier(n: usize, table: &[f64], a: f64, b: f64) -> Vec<f64> {
+    let row = 2 * n + 1;
+    let (d, mu) = (b - a, 0.5 * (a + b));
+    (0..n * (n + 1) / 2)
+        .map(|e| {
+            let r = &table[e * row..(e + 1) * row];
+            let mut v = r[0] * d;
+            for k in 1..=n {
+                let kf = k as f64;
+                v += 2.0 / kf * (0.5 * kf * d).sin() * (r[k] * (kf * mu).cos() + r[n + k] * (kf * mu).sin());
+            }
+            v
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn legendre_quadrature_is_converged_and_matches_the_closed_form() {
+        for n in [2usize, 4, 6, 8] {
+            let t = fourier_table(n);
+            for (a, b) in [(-1.5, 1.5707963267948966), (-0.3, 0.2), (0.1, 0.1 + 1e-6), (-FRAC_PI_2, 1.0)] {
+                let q = legendre_interval(n, a, b);
+                let fine = {
+                    // Two halves: an independent, finer rule.
+                    let (h1, h2) = (legendre_interval(n, a, 0.5 * (a + b)), legendre_interval(n, 0.5 * (a + b), b));
+                    h1.iter().zip(&h2).map(|(x, y)| x + y).collect::<Vec<_>>()
+                };
+                let f = legendre_interval_fourier(n, &t, a, b);
+                let scale = q.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+                for ((x, y), z) in q.iter().zip(&fine).zip(&f) {
+                    assert!((x - y).abs() <= 1e-12 * scale, "n={n} [{a},{b}]: {x} vs {y}");
+                    assert!((x - z).abs() <= 1e-10 * scale, "n={n} [{a},{b}]: quadrature {x} vs closed form {z}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn m_zero_terms_are_the_nlp_ones() {
+        // e_l0 = ∫ P_l dz and the NLP coefficient is ∫ P̂_l dz = √((2l+1)/2) ∫ P_l dz.
+        let n = 5;
+        let (e, v) = (legendre_interval(n, -0.4, 0.9), nlp::interval(n, -0.4, 0.9));
+        for l in 0..n {
+            let want = v[l] / ((2 * l + 1) as f64 / 2.0).sqrt();
+            assert!((e[index(l, 0)] - want).abs() < 1e-13, "l={l}: {} vs {want}", e[index(l, 0)]);
+        }
+    }
+}

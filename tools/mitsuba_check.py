@@ -1,0 +1,579 @@
+#!/usr/bin/env python3
+"""Independent peer check of hfgi's ground truth, with Mitsuba 3 as the ray tracer.
+
+Reads an `hfgi export` folder (heights.f32 + scene.toml) and computes the shading layers that
+/work/shared/CONVENTIONS.md ("Shading and exported values") defines, by Monte Carlo over the
+hemisphere, sharing no code with hfgi:
+
+  mesh       the bilinear surface refined R x R per texel (vertices at ((i+a/R)s, (j+b/R)s,
+             bilinear height), two triangles per sub-quad); domain [0,W-1]x[0,H-1]*s, nothing
+             outside it, so rays that leave it escape. wrap=true is not supported (exit 2).
+  receivers  every texel sample (i s, j s, H[j][i]) with the CONVENTIONS.md normal (central
+             differences, one-sided at the border).
+  direct     E = pi/n sum_k V(w_k) L_env(w_k) over n stratified cosine-weighted directions about
+             N (L_env = the SH environment as given, not clamped), plus for each key light
+             Omega_cap/n sum_k V(w_k) max(N.w_k,0) L_key over n stratified directions uniform in
+             the cap (solid angle). V = 1 iff the ray escapes. L_o = rho/pi E.
+  indirect   bounce b >= 1: L_o,b = rho/n sum_k L_o,b-1(hit_k) with fresh cosine directions;
+             L_o,b-1 is bilinearly interpolated from the texel grid at (x/s, y/s) of the first
+             hit; escaping rays give 0. indirect = sum over b = 1..bounces. total = direct +
+             indirect. glossy = 0.
+
+Near field. Directions are sampled about the CONVENTIONS.md normal N, which is not the normal
+of the surface around the receiver (a crease, the foot or top of a cliff), so some directions
+above N's tangent plane go into the surface at once. Those are found exactly, without tracing:
+the ray enters the quad that its horizontal direction points into, and goes in iff d_z is below
+the bilinear patch's directional derivative at that corner. By the definition ("the first
+height-field point the ray hits") such a ray is blocked (direct) and its first hit is the
+receiver itself (indirect: it sees L_o,b-1 of the receiver). Every other ray is traced from the
+receiver lifted straight up by eps (default: 1e-4 x the larger of the texel size and the
+largest height step between neighbouring texels, and at least 64 float32 ulps of the largest
+coordinate); lifting along +z always lands on the open side of a height field (a graph over
+xy), unlike a lift along N. A border receiver's directions that leave the domain escape.
+(Without the exact test, i.e. --no-local-test, the lift alone decides those rays: on a 64²
+one-texel cliff that put the indirect term of the cliff-foot column 0.3% high at the default
+eps and 1.4% at 10x, and tiny eps (1e-6 relative) leaked rays through the cliff face. With
+it, 10x / 0.1x eps move the indirect layer by 0.10% / 0.03% rel-L2 there.)
+
+Everything but the intersection (sampling, SH, interpolation, sums) is numpy in float64;
+Mitsuba (variant llvm_ad_rgb; scalar_rgb only as a loud fallback) intersects float32 rays
+with the float32 mesh. Deterministic for a given --seed, whatever --chunk and --threads are.
+
+Usage: tools/mitsuba_check.py EXPORT_DIR --out FILE.exr [--spp N] [--key-spp N] [--bounce-spp N] [--refine R]
+                              [--seed S] [--threads T] [--chunk RAYS] [--eps E]
+"""
+
+import argparse
+import glob
+import math
+import os
+import sys
+import time
+import tomllib
+
+import numpy as np
+
+
+def log(msg):
+    print(f"[mitsuba_check] {msg}", file=sys.stderr, flush=True)
+
+
+def find_libllvm():
+    """The newest libLLVM >= 16 on the usual Debian paths (Dr.Jit needs >= 16)."""
+    best = None
+    for path in glob.glob("/usr/lib/*/libLLVM*.so*") + glob.glob("/usr/lib/llvm-*/lib/libLLVM*.so*"):
+        name = os.path.basename(path)
+        digits = "".join(c if c.isdigit() else " " for c in name).split()
+        if not digits:
+            continue
+        major = int(digits[0])
+        if major >= 16 and (best is None or major > best[0]):
+            best = (major, path)
+    return best[1] if best else None
+
+
+def llvm_major(path):
+    digits = "".join(c if c.isdigit() else " " for c in os.path.basename(os.path.realpath(path))).split()
+    return int(digits[0]) if digits else None
+
+
+_PROBE = ("import drjit as dr, mitsuba as mi; dr.set_thread_count(1); mi.set_variant('llvm_ad_rgb'); "
+          "x = dr.arange(mi.Float, 8); print(dr.maximum(x, 3.0).numpy().sum())")
+
+
+def init_mitsuba(threads, force_scalar=False):
+    """llvm_ad_rgb when a working libLLVM >= 16 is there, else scalar_rgb, said loudly.
+
+    LLVM 15 (Debian 12's default) aborts the whole process inside LLVM ("Cannot select:
+    fmaximum") on the first dr.maximum, which no try/except catches, so the backend is probed in
+    a child process first."""
+    import subprocess
+
+    reason = None
+    if not force_scalar:
+        lib = os.environ.get("DRJIT_LIBLLVM_PATH")
+        if lib and (llvm_major(lib) or 0) < 16:
+            log(f"DRJIT_LIBLLVM_PATH={lib} is LLVM {llvm_major(lib)} (< 16, breaks Dr.Jit); looking for a newer one")
+            lib = None
+        if not lib:
+            lib = find_libllvm()
+        if lib:
+            os.environ["DRJIT_LIBLLVM_PATH"] = lib
+            probe = subprocess.run([sys.executable, "-c", _PROBE], capture_output=True, text=True, timeout=300)
+            if probe.returncode != 0 or probe.stdout.strip() != "34.0":
+                reason = f"probe with {lib} failed (rc {probe.returncode}): {(probe.stderr or probe.stdout).strip()[-300:]}"
+        else:
+            reason = "no libLLVM >= 16 found (tools/mitsuba-deps.sh installs one)"
+    import drjit as dr
+    import mitsuba as mi
+
+    variant = "scalar_rgb"
+    if not force_scalar and reason is None:
+        if threads > 0:
+            dr.set_thread_count(threads)
+        mi.set_variant("llvm_ad_rgb")
+        variant = "llvm_ad_rgb"
+    else:
+        if reason:
+            log("!" * 72)
+            log(f"!!! llvm_ad_rgb UNAVAILABLE: {reason}")
+            log("!!! FALLING BACK TO scalar_rgb: one ray per Python call, far too slow past tiny fields.")
+            log("!" * 72)
+        mi.set_variant("scalar_rgb")
+    log(f"mitsuba {mi.__version__}, variant {variant}, Dr.Jit threads {dr.thread_count()}, "
+        f"DRJIT_LIBLLVM_PATH={os.environ.get('DRJIT_LIBLLVM_PATH', '(unset)')}")
+    return dr, mi, variant
+
+
+# ---------------------------------------------------------------------------------------------
+# Export
+
+
+def load_export(d):
+    with open(os.path.join(d, "scene.toml"), "rb") as f:
+        sc = tomllib.load(f)
+    w, h = int(sc["width"]), int(sc["height"])
+    heights = np.fromfile(os.path.join(d, "heights.f32"), dtype="<f4")
+    if heights.size != w * h:
+        sys.exit(f"heights.f32 has {heights.size} values, expected {w}x{h}")
+    sc["H"] = heights.reshape(h, w).astype(np.float64)
+    sc["environment_sh"] = np.asarray(sc["environment_sh"], dtype=np.float64).reshape(-1, 3)
+    sc["albedo"] = np.asarray(sc["albedo"], dtype=np.float64)
+    sc.setdefault("key_light", [])
+    return sc
+
+
+def normals(H, s):
+    h, w = H.shape
+    i = np.arange(w)
+    j = np.arange(h)
+    i0, i1 = np.maximum(i - 1, 0), np.minimum(i + 1, w - 1)
+    j0, j1 = np.maximum(j - 1, 0), np.minimum(j + 1, h - 1)
+    dx = (H[:, i1] - H[:, i0]) / ((i1 - i0) * s)[None, :]
+    dy = (H[j1, :] - H[j0, :]) / ((j1 - j0) * s)[:, None]
+    n = np.stack([-dx, -dy, np.ones_like(H)], axis=-1)
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+
+def build_mesh(mi, H, s, R):
+    """The bilinear surface, refined R x R per texel, as a Mitsuba mesh."""
+    h, w = H.shape
+    nx, ny = (w - 1) * R + 1, (h - 1) * R + 1
+    u = np.arange(nx) / R  # texel coordinates
+    v = np.arange(ny) / R
+    i0 = np.minimum(np.floor(u).astype(int), w - 2)
+    j0 = np.minimum(np.floor(v).astype(int), h - 2)
+    fu = (u - i0)[None, :]
+    fv = (v - j0)[:, None]
+    h00 = H[j0][:, i0]
+    h10 = H[j0][:, i0 + 1]
+    h01 = H[j0 + 1][:, i0]
+    h11 = H[j0 + 1][:, i0 + 1]
+    z = (1 - fv) * ((1 - fu) * h00 + fu * h10) + fv * ((1 - fu) * h01 + fu * h11)
+    # Exact heights at the texel vertices (the receivers sit on them).
+    z[::R, ::R] = H
+    X, Y = np.meshgrid(u * s, v * s)
+    pos = np.stack([X, Y, z], axis=-1).reshape(-1, 3).astype(np.float32)
+    idx = np.arange(nx * ny, dtype=np.uint32).reshape(ny, nx)
+    a = idx[:-1, :-1].ravel()
+    b = idx[:-1, 1:].ravel()
+    c = idx[1:, :-1].ravel()
+    d = idx[1:, 1:].ravel()
+    faces = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)]).astype(np.uint32)
+    mesh = mi.Mesh("heightfield", nx * ny, faces.shape[0], has_vertex_normals=False,
+                   has_vertex_texcoords=False)
+    params = mi.traverse(mesh)
+    # The buffers' own array types (mi.Float / mi.UInt32 under llvm, dynamic arrays under scalar).
+    params["vertex_positions"] = type(params["vertex_positions"])(pos.ravel())
+    params["faces"] = type(params["faces"])(faces.ravel())
+    params.update()
+    scene = mi.load_dict({"type": "scene", "heightfield": mesh})
+    log(f"mesh: {nx}x{ny} vertices, {faces.shape[0]} triangles (refine {R})")
+    return scene
+
+
+# ---------------------------------------------------------------------------------------------
+# Spherical harmonics (real, orthonormal, no Condon-Shortley phase, k = l(l+1)+m)
+
+
+def sh_eval_rgb(coeffs, d):
+    """sum_k coeffs[k] y_k(d) for unit directions d (N x 3); coeffs n^2 x C. Any order n."""
+    n = int(round(math.sqrt(coeffs.shape[0])))
+    assert n * n == coeffs.shape[0]
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    out = np.zeros((d.shape[0], coeffs.shape[1]))
+    # P~_l^m = P_l^m / sin^m(theta), a polynomial in z; (x + i y)^m = sin^m e^{i m phi}.
+    cm = np.ones_like(x)  # Re (x+iy)^m
+    sm = np.zeros_like(x)  # Im (x+iy)^m
+    dfact = 1.0  # (2m-1)!!
+    for m in range(n):
+        if m > 0:
+            cm, sm = cm * x - sm * y, cm * y + sm * x
+            dfact *= 2 * m - 1
+        p_prev = None
+        p = np.full_like(z, dfact)  # P~_m^m
+        for l in range(m, n):
+            if l == m + 1:
+                p_prev, p = p, z * (2 * m + 1) * p
+            elif l > m + 1:
+                p_prev, p = p, ((2 * l - 1) * z * p - (l + m - 1) * p_prev) / (l - m)
+            K = math.sqrt((2 * l + 1) / (4 * math.pi) * math.factorial(l - m) / math.factorial(l + m))
+            if m == 0:
+                out += np.outer(K * p, coeffs[l * (l + 1)])
+            else:
+                out += np.outer(math.sqrt(2) * K * cm * p, coeffs[l * (l + 1) + m])
+                out += np.outer(math.sqrt(2) * K * sm * p, coeffs[l * (l + 1) - m])
+    return out
+
+
+def sh_basis_order4_cartesian(d):
+    """The CONVENTIONS.md order-4 Cartesian list, for the self-test only."""
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    return np.stack([
+        0.282095 * np.ones_like(x),
+        0.488603 * y, 0.488603 * z, 0.488603 * x,
+        1.092548 * x * y, 1.092548 * y * z, 0.315392 * (3 * z * z - 1), 1.092548 * x * z,
+        0.546274 * (x * x - y * y),
+        0.590044 * y * (3 * x * x - y * y), 2.890611 * x * y * z, 0.457046 * y * (5 * z * z - 1),
+        0.373176 * z * (5 * z * z - 3), 0.457046 * x * (5 * z * z - 1),
+        1.445306 * z * (x * x - y * y), 0.590044 * x * (x * x - 3 * y * y),
+    ], axis=1)
+
+
+def self_test():
+    rng = np.random.default_rng(1)
+    d = rng.normal(size=(1000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    B = sh_basis_order4_cartesian(d)
+    for k in range(16):
+        c = np.zeros((16, 3))
+        c[k] = 1.0
+        err = np.abs(sh_eval_rgb(c, d)[:, 0] - B[:, k]).max()
+        assert err < 2e-5, (k, err)
+    # Orthonormality of order 6 by quadrature (Fibonacci sphere).
+    m = 50000
+    t = (np.arange(m) + 0.5) / m
+    zz = 1 - 2 * t
+    ph = math.pi * (1 + 5 ** 0.5) * np.arange(m)
+    r = np.sqrt(1 - zz * zz)
+    d = np.stack([r * np.cos(ph), r * np.sin(ph), zz], 1)
+    Y = sh_eval_rgb(np.eye(36), d)
+    G = Y.T @ Y * (4 * math.pi / m)
+    assert np.abs(G - np.eye(36)).max() < 1e-3, np.abs(G - np.eye(36)).max()
+    log("self-test: SH matches the CONVENTIONS.md order-4 table and is orthonormal to order 6")
+
+
+# ---------------------------------------------------------------------------------------------
+# Sampling
+
+
+def onb(n):
+    """Orthonormal tangent frame (Duff et al. 2017) for unit normals n (N x 3)."""
+    sign = np.where(n[:, 2] >= 0, 1.0, -1.0)
+    a = -1.0 / (sign + n[:, 2])
+    b = n[:, 0] * n[:, 1] * a
+    t = np.stack([1 + sign * n[:, 0] ** 2 * a, sign * b, -sign * n[:, 0]], 1)
+    bt = np.stack([b, sign + n[:, 1] ** 2 * a, -n[:, 1]], 1)
+    return t, bt
+
+
+def _splitmix64(x):
+    x = x + np.uint64(0x9E3779B97F4A7C15)
+    x = (x ^ (x >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    x = (x ^ (x >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return x ^ (x >> np.uint64(31))
+
+
+def stratified(key, texels, m):
+    """m x m jittered grid per texel: (len(texels)*m*m) x 2 in [0,1)^2, texel-major.
+
+    The jitter is a counter-based hash of (key, texel, sample, dimension), so the result does
+    not depend on how texels are chunked."""
+    n = m * m
+    g = np.arange(n, dtype=np.uint64)
+    ctr = (texels.astype(np.uint64)[:, None] * np.uint64(n) + g[None, :]).ravel() * np.uint64(2)
+    k = _splitmix64(np.asarray([key], dtype=np.uint64))[0]
+    ju = (_splitmix64(ctr ^ k) >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+    jv = (_splitmix64((ctr + np.uint64(1)) ^ k) >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+    ga = np.tile((np.arange(n) % m).astype(np.float64), len(texels))
+    gb = np.tile((np.arange(n) // m).astype(np.float64), len(texels))
+    return np.stack([(ga + ju) / m, (gb + jv) / m], -1)
+
+
+def cosine_local(uv):
+    """Concentric (Shirley-Chiu) map + Malley: cosine-weighted local directions."""
+    a = 2 * uv[:, 0] - 1
+    b = 2 * uv[:, 1] - 1
+    big = np.abs(a) > np.abs(b)
+    r = np.where(big, a, b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phi = np.where(big, (math.pi / 4) * (b / a), (math.pi / 2) - (math.pi / 4) * (a / b))
+    phi = np.where((a == 0) & (b == 0), 0.0, phi)
+    x = r * np.cos(phi)
+    y = r * np.sin(phi)
+    z = np.sqrt(np.maximum(0.0, 1 - x * x - y * y))
+    return np.stack([x, y, z], 1)
+
+
+def cap_local(uv, cos_alpha):
+    """Uniform by solid angle in a cap of half-angle alpha about +z."""
+    ct = 1 - uv[:, 0] * (1 - cos_alpha)
+    st = np.sqrt(np.maximum(0.0, 1 - ct * ct))
+    ph = 2 * math.pi * uv[:, 1]
+    return np.stack([st * np.cos(ph), st * np.sin(ph), ct], 1)
+
+
+def to_world(local, n, t, b):
+    return local[:, 0:1] * t + local[:, 1:2] * b + local[:, 2:3] * n
+
+
+def bilinear(grid, fx, fy):
+    """grid (H, W, 3) sampled at texel coordinates (fx, fy), clamped to the domain."""
+    h, w, _ = grid.shape
+    fx = np.clip(fx, 0, w - 1)
+    fy = np.clip(fy, 0, h - 1)
+    i0 = np.minimum(np.floor(fx).astype(np.int64), w - 2)
+    j0 = np.minimum(np.floor(fy).astype(np.int64), h - 2)
+    ax = (fx - i0)[:, None]
+    ay = (fy - j0)[:, None]
+    return ((1 - ay) * ((1 - ax) * grid[j0, i0] + ax * grid[j0, i0 + 1])
+            + ay * ((1 - ax) * grid[j0 + 1, i0] + ax * grid[j0 + 1, i0 + 1]))
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+class Tracer:
+    """Batches of rays through Mitsuba: one wavefront (llvm_ad_rgb) or a Python loop (scalar_rgb)."""
+
+    def __init__(self, mi, scene, variant):
+        self.mi = mi
+        self.scene = scene
+        self.scalar = variant.startswith("scalar")
+        self.rays = 0
+        self.seconds = 0.0
+
+    def _ray(self, o, d):
+        mi = self.mi
+        o = o.astype(np.float32)
+        d = d.astype(np.float32)
+        return mi.Ray3f(mi.Point3f(o[:, 0], o[:, 1], o[:, 2]), mi.Vector3f(d[:, 0], d[:, 1], d[:, 2]))
+
+    def _scalar_rays(self, o, d):
+        mi = self.mi
+        for a, b in zip(o.astype(np.float32).tolist(), d.astype(np.float32).tolist()):
+            yield mi.Ray3f(mi.Point3f(*a), mi.Vector3f(*b))
+
+    def escapes(self, o, d):
+        t0 = time.time()
+        if self.scalar:
+            hit = np.fromiter((bool(self.scene.ray_test(r)) for r in self._scalar_rays(o, d)), bool, len(o))
+        else:
+            hit = self.scene.ray_test(self._ray(o, d)).numpy().astype(bool)
+        self.seconds += time.time() - t0
+        self.rays += len(o)
+        return ~hit
+
+    def hit_t(self, o, d):
+        """Distance to the first hit (inf where the ray escapes)."""
+        t0 = time.time()
+        if self.scalar:
+            t = np.full(len(o), np.inf)
+            for k, r in enumerate(self._scalar_rays(o, d)):
+                pi = self.scene.ray_intersect_preliminary(r)
+                if pi.is_valid():
+                    t[k] = float(pi.t)
+        else:
+            pi = self.scene.ray_intersect_preliminary(self._ray(o, d))
+            valid = pi.is_valid().numpy().astype(bool)
+            t = np.where(valid, pi.t.numpy().astype(np.float64), np.inf)
+        self.seconds += time.time() - t0
+        self.rays += len(o)
+        return t
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("export_dir", nargs="?")
+    ap.add_argument("--out", help="output EXR (layers direct, indirect, glossy, total in R,G,B)")
+    ap.add_argument("--spp", type=int, default=1024, help="cosine samples per texel and pass (rounded to a square)")
+    ap.add_argument("--key-spp", type=int, default=None, help="samples per texel per key light (default: --spp)")
+    ap.add_argument("--bounce-spp", type=int, default=None,
+                    help="cosine samples per texel per indirect bounce (default: --spp)")
+    ap.add_argument("--refine", type=int, default=4, help="mesh sub-quads per texel edge")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--threads", type=int, default=int(os.environ.get("MITSUBA_CHECK_THREADS", "1")),
+                    help="Dr.Jit threads (0: all cores; default 1 or $MITSUBA_CHECK_THREADS)")
+    ap.add_argument("--chunk", type=int, default=1 << 20, help="rays per wavefront (bounds memory)")
+    ap.add_argument("--eps", type=float, default=None, help="vertical lift of ray origins (world units)")
+    ap.add_argument("--no-local-test", action="store_true",
+                    help="trace every ray, also those that go into the surface at t = 0+ (for testing)")
+    ap.add_argument("--scalar", action="store_true", help="force the scalar_rgb variant (slow)")
+    ap.add_argument("--self-test", action="store_true", help="check the SH code and exit")
+    args = ap.parse_args()
+
+    if args.self_test:
+        self_test()
+        return
+    if not args.export_dir or not args.out:
+        ap.error("EXPORT_DIR and --out are required")
+    self_test()
+
+    sc = load_export(args.export_dir)
+    if sc.get("wrap", False):
+        log("wrap = true is not supported by this check (periodic fields need an infinite tiling)")
+        sys.exit(2)
+    H, s = sc["H"], float(sc["texel_size"])
+    h, w = H.shape
+    rho = sc["albedo"]
+    env = sc["environment_sh"]
+    bounces = int(sc.get("bounces", 0))
+    keys = sc["key_light"]
+    m = max(1, int(round(math.sqrt(args.spp))))
+    spp = m * m
+    mk = max(1, int(round(math.sqrt(args.key_spp if args.key_spp else args.spp))))
+    kspp = mk * mk
+    mb = max(1, int(round(math.sqrt(args.bounce_spp if args.bounce_spp else args.spp))))
+    bspp = mb * mb
+
+    dz = max(np.abs(np.diff(H, axis=0)).max(initial=0.0), np.abs(np.diff(H, axis=1)).max(initial=0.0))
+    extent = max((w - 1) * s, (h - 1) * s, np.abs(H).max())
+    eps = args.eps if args.eps is not None else max(1e-4 * max(s, dz), 64 * float(np.spacing(np.float32(extent))))
+    log(f"{args.export_dir}: {w}x{h}, s={s}, bounces={bounces}, {len(keys)} key light(s), SH order "
+        f"{int(round(math.sqrt(env.shape[0])))}, spp={spp} ({m}x{m} stratified), key spp={kspp}, bounce spp={bspp}, eps={eps:.3g}, seed={args.seed}")
+
+    dr, mi, variant = init_mitsuba(args.threads, args.scalar)
+    scene = build_mesh(mi, H, s, args.refine)
+    tracer = Tracer(mi, scene, variant)
+
+    N = normals(H, s).reshape(-1, 3)
+    T, B = onb(N)
+    jj, ii = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
+    P = np.stack([ii.ravel() * s, jj.ravel() * s, H.ravel()], 1)
+    O = P + np.array([0.0, 0.0, eps])
+    ntex = w * h
+    Hf = H.ravel()
+
+    def enters_below(tex, d):
+        """True where the ray from receiver `tex` along d goes into the bilinear surface at
+        t = 0+: its slope d_z is below the surface's one-sided directional derivative into the
+        quad it enters, (H[j][i±1]-H[j][i])|d_x|/s + (H[j±1][i]-H[j][i])|d_y|/s (the bilinear
+        uv term has no first-order part at a corner). A ray that leaves the domain at once
+        never does."""
+        if args.no_local_test:
+            return np.zeros(len(d), dtype=bool)
+        i, j = tex % w, tex // w
+        i1 = np.where(d[:, 0] >= 0, i + 1, i - 1)
+        j1 = np.where(d[:, 1] >= 0, j + 1, j - 1)
+        inside = (i1 >= 0) & (i1 < w) & (j1 >= 0) & (j1 < h)
+        i1c, j1c = np.clip(i1, 0, w - 1), np.clip(j1, 0, h - 1)
+        h0 = Hf[tex]
+        slope = ((Hf[j * w + i1c] - h0) * np.abs(d[:, 0]) + (Hf[j1c * w + i] - h0) * np.abs(d[:, 1])) / s
+        return inside & (d[:, 2] < slope)
+
+    def passes(label, pass_id, per_texel, fn):
+        """Run fn(texel_slice, key) over chunks of texels; fn returns a (len, 3) array."""
+        out = np.zeros((ntex, 3))
+        tpc = max(1, args.chunk // per_texel)
+        nch = (ntex + tpc - 1) // tpc
+        t0 = time.time()
+        for c in range(nch):
+            sl = slice(c * tpc, min(ntex, (c + 1) * tpc))
+            key = (args.seed * 1000003 + pass_id) & ((1 << 63) - 1)
+            out[sl] = fn(sl, key)
+            if c == nch - 1 or (c % max(1, nch // 10)) == 0:
+                el = time.time() - t0
+                log(f"{label}: chunk {c + 1}/{nch}, {el:.1f} s")
+        return out
+
+    # Direct: environment.
+    def env_chunk(sl, key):
+        nt = sl.stop - sl.start
+        loc = cosine_local(stratified(key, np.arange(sl.start, sl.stop), m))
+        rep = lambda a: np.repeat(a[sl], spp, axis=0)  # noqa: E731
+        d = to_world(loc, rep(N), rep(T), rep(B))
+        tex = np.repeat(np.arange(sl.start, sl.stop), spp)
+        vis = ~enters_below(tex, d)
+        vis[vis] = tracer.escapes(rep(O)[vis], d[vis])
+        L = sh_eval_rgb(env, d) * vis[:, None]
+        return math.pi * L.reshape(nt, spp, 3).mean(1)
+
+    E = passes("direct/environment", 0, spp, env_chunk)
+
+    # Direct: key lights as true caps.
+    for kidx, kl in enumerate(keys):
+        kd = np.asarray(kl["direction"], dtype=np.float64)
+        kd /= np.linalg.norm(kd)
+        alpha = float(kl["angular_radius"])
+        Lk = np.asarray(kl["radiance"], dtype=np.float64)
+        ca = math.cos(alpha)
+        omega = 2 * math.pi * (1 - ca)
+        kt, kb = onb(kd[None, :])
+
+        def key_chunk(sl, key, kd=kd, kt=kt, kb=kb, ca=ca, omega=omega, Lk=Lk):
+            nt = sl.stop - sl.start
+            loc = cap_local(stratified(key, np.arange(sl.start, sl.stop), mk), ca)
+            d = to_world(loc, kd[None, :], kt, kb)
+            Nr = np.repeat(N[sl], kspp, axis=0)
+            cos = np.einsum("ij,ij->i", Nr, d)
+            up = cos > 0
+            up &= ~enters_below(np.repeat(np.arange(sl.start, sl.stop), kspp), d)
+            vis = np.zeros(len(d), dtype=bool)
+            if up.any():
+                vis[up] = tracer.escapes(np.repeat(O[sl], kspp, axis=0)[up], d[up])
+            wgt = np.where(vis, cos, 0.0)
+            return omega * wgt.reshape(nt, kspp).mean(1)[:, None] * Lk[None, :]
+
+        E += passes(f"direct/key light {kidx}", 100 + kidx, kspp, key_chunk)
+
+    direct = rho[None, :] / math.pi * E
+    grid = direct.reshape(h, w, 3)
+
+    # Indirect bounces, fresh directions each bounce.
+    indirect = np.zeros_like(direct)
+    for b in range(1, bounces + 1):
+        prev = grid
+
+        def ind_chunk(sl, key, prev=prev):
+            nt = sl.stop - sl.start
+            loc = cosine_local(stratified(key, np.arange(sl.start, sl.stop), mb))
+            rep = lambda a: np.repeat(a[sl], bspp, axis=0)  # noqa: E731
+            d = to_world(loc, rep(N), rep(T), rep(B))
+            o = rep(O)
+            tex = np.repeat(np.arange(sl.start, sl.stop), bspp)
+            below = enters_below(tex, d)
+            t = np.full(len(d), np.inf)
+            t[~below] = tracer.hit_t(o[~below], d[~below])
+            hit = np.isfinite(t)
+            Lin = np.zeros((len(d), 3))
+            # Into the surface at t = 0+: the first hit is the receiver itself.
+            Lin[below] = prev.reshape(-1, 3)[tex[below]]
+            if hit.any():
+                p = o[hit] + t[hit, None] * d[hit]
+                Lin[hit] = bilinear(prev, p[:, 0] / s, p[:, 1] / s)
+            return rho[None, :] * Lin.reshape(nt, bspp, 3).mean(1)
+
+        Lb = passes(f"indirect/bounce {b}", 200 + b, bspp, ind_chunk)
+        indirect += Lb
+        grid = Lb.reshape(h, w, 3)
+
+    total = direct + indirect
+    img = np.concatenate([total, direct, np.zeros_like(direct), indirect], axis=1).reshape(h, w, 12)
+    names = ["R", "G", "B", "direct.R", "direct.G", "direct.B", "glossy.R", "glossy.G", "glossy.B",
+             "indirect.R", "indirect.G", "indirect.B"]
+    bmp = mi.Bitmap(np.ascontiguousarray(img.astype(np.float32)),
+                    pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+    # Mitsuba 3.9.1's EXR writer deadlocks on a one-thread Dr.Jit pool (it waits on a task
+    # that it queued behind itself): give it a second thread for the write.
+    if dr.thread_count() < 2:
+        dr.set_thread_count(2)
+    bmp.write(args.out)
+    log(f"traced {tracer.rays / 1e6:.1f} M rays in {tracer.seconds:.1f} s "
+        f"({tracer.rays / max(tracer.seconds, 1e-9) / 1e6:.2f} M rays/s, variant {variant})")
+    log(f"means: direct {direct.mean(0)}, indirect {indirect.mean(0)}")
+    log(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
