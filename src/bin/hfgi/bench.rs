@@ -33,6 +33,10 @@ pub struct BenchArgs {
     /// Override a setting of every scene, e.g. `--set gi.sh_order=4`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     overrides: Vec<String>,
+    /// Keep only these knobs of the sweep (comma-separated names of the `knob` column, e.g.
+    /// `level_offset,azimuths`); the baseline is always kept.
+    #[arg(long, value_delimiter = ',')]
+    only: Vec<String>,
     /// Timed frames per configuration (after one warm-up frame); the median is reported.
     #[arg(long, default_value_t = 5)]
     frames: u32,
@@ -89,7 +93,8 @@ struct Row {
     shvis: [f64; 3],
 }
 
-/// The configurations: the baseline, then one knob at a time, then (full sweep) the m × k grid.
+/// The configurations: the baseline, then one knob at a time, the four presets, then (full
+/// sweep) the m × k grid.
 fn configs(base: &GiSettings, quick: bool) -> Vec<(String, GiSettings)> {
     let mut out = vec![("baseline".to_string(), base.clone())];
     let mut push = |knob: &str, f: &dyn Fn(&mut GiSettings)| {
@@ -126,6 +131,10 @@ fn configs(base: &GiSettings, quick: bool) -> Vec<(String, GiSettings)> {
     }
     for b in 0..=3 {
         push("bounces", &|g| g.bounces = b);
+    }
+    // The presets, marked on the Pareto plot (one group each).
+    for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {
+        push(&format!("quality={q}"), &|g| *g = base.with_quality(q));
     }
     if !quick {
         for m in [8, 16, 32, 64, 128] {
@@ -290,6 +299,12 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             Sweep::Ablation => ablation(&scene.gi, false),
             Sweep::Presets => ablation(&scene.gi, true),
         };
+        let cfgs: Vec<(String, GiSettings)> = cfgs
+            .into_iter()
+            .enumerate()
+            .filter(|(i, (knob, _))| *i == 0 || a.only.is_empty() || a.only.iter().any(|o| o == knob))
+            .map(|(_, c)| c)
+            .collect();
         let max_b = cfgs.iter().map(|(_, g)| g.bounces).max().unwrap_or(0);
         let mut orders: Vec<usize> = cfgs.iter().map(|(_, g)| g.sh_order).collect();
         orders.sort();
