@@ -2,6 +2,8 @@
 
 pub mod direct;
 pub mod indirect;
+pub mod cap;
 pub mod pyramid;
+pub mod ray;
 pub mod truth;
 pub mod water;
