@@ -22,9 +22,7 @@ use super::shared::TruthPush;
 use crate::error::Result;
 use crate::math::quadrature::gauss_legendre;
 use crate::reference::direct::normals;
-use crate::reference::truth::{
-    albedo, environment_sh, key_caps, lighting_sh, Finisher, TruthOutput, TruthSettings,
-};
+use crate::reference::truth::{albedo, environment_sh, key_caps, lighting_sh, Finisher, TruthOutput, TruthSettings};
 use crate::scene::model::Scene;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};

@@ -243,8 +243,8 @@ mod tests {
                     last = p.t1;
                     for f in [0.0, 0.3, 0.77, 1.0] {
                         let t = p.t0 + f * (p.t1 - p.t0);
-                        let want = bilinear(&data, w, h, i as f64 + t * d[0], j as f64 + t * d[1], wrap)
-                            - data[j * w + i];
+                        let want =
+                            bilinear(&data, w, h, i as f64 + t * d[0], j as f64 + t * d[1], wrap) - data[j * w + i];
                         assert!((p.value(t - p.t0) - want).abs() < 1e-12, "{wrap} {i} {j} {phi} t={t}");
                     }
                 }

@@ -30,9 +30,10 @@ use super::cap::{cap_azimuths, cap_window};
 use super::direct::normals;
 pub use super::ray::bilinear;
 use super::ray::{first_hits, horizon_slope, march, pieces, Piece, Surface};
+use super::sh_eval::ShBasis;
 use crate::error::{Error, Result};
 use crate::math::quadrature::gauss_legendre;
-use crate::math::{sh, triple, zh};
+use crate::math::{triple, zh};
 use crate::scene::model::{Albedo, KeyLight, Scene};
 
 /// Sampling of the ground truth (defaults: CONVENTIONS.md minimums).
@@ -276,12 +277,13 @@ impl Setup<'_> {
         let dphi = 2.0 * PI / self.settings.azimuths as f64;
         let mut e = [0.0; 3];
         let mut vis = vec![[0.0; 3]; n * n];
+        let mut basis = ShBasis::new(n);
         for phi in self.azimuths() {
             let hor = Profile::trace(&surf, i, j, phi, self.settings).horizon(s);
             if self.settings.sh_visibility {
                 for (om, wt) in nodes_on(&self.gauss, hor, FRAC_PI_2) {
-                    let y = sh::eval(n, direction(om, phi).to_array());
-                    for (v, yk) in vis.iter_mut().zip(&y) {
+                    let y = basis.eval(direction(om, phi).to_array());
+                    for (v, yk) in vis.iter_mut().zip(y) {
                         v[0] += dphi * wt * om.cos() * yk;
                     }
                 }
@@ -290,10 +292,10 @@ impl Setup<'_> {
             let lo = hor.max(tangent_elevation(self.nrm[p], phi));
             for (om, wt) in nodes_on(&self.gauss, lo, FRAC_PI_2) {
                 let d = direction(om, phi);
-                let y = sh::eval(n, d.to_array());
+                let y = basis.eval(d.to_array());
                 let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
                 for (ch, ec) in e.iter_mut().enumerate() {
-                    *ec += cosf * self.light.iter().zip(&y).map(|(l, yk)| l[ch] * yk).sum::<f64>();
+                    *ec += cosf * self.light.iter().zip(y).map(|(l, yk)| l[ch] * yk).sum::<f64>();
                 }
             }
         }
@@ -340,6 +342,7 @@ impl Setup<'_> {
         let dphi = 2.0 * PI / self.settings.azimuths as f64;
         let mut e = [0.0; 3];
         let mut u = vec![[0.0; 3]; n * n];
+        let mut basis = ShBasis::new(n);
         for phi in self.azimuths() {
             let prof = Profile::trace(&surf, i, j, phi, self.settings);
             let (hor, lo) = (prof.horizon(s), tangent_elevation(self.nrm[p], phi));
@@ -349,11 +352,12 @@ impl Setup<'_> {
             let nodes: Vec<(f64, f64)> = nodes_on(&self.gauss, lo, hor).collect();
             let omegas: Vec<f64> = nodes.iter().map(|v| v.0).collect();
             for ((om, wt), q) in nodes.iter().zip(prof.hits(&omegas, s)) {
-                let r: Vec<f64> = chans.iter().map(|c| bilinear(c, surf.width, surf.height, q[0], q[1], surf.wrap)).collect();
+                let r: Vec<f64> =
+                    chans.iter().map(|c| bilinear(c, surf.width, surf.height, q[0], q[1], surf.wrap)).collect();
                 let d = direction(*om, phi);
                 if self.settings.sh_visibility {
-                    let y = sh::eval(n, d.to_array());
-                    for (uk, yk) in u.iter_mut().zip(&y) {
+                    let y = basis.eval(d.to_array());
+                    for (uk, yk) in u.iter_mut().zip(y) {
                         for ch in 0..3 {
                             uk[ch] += dphi * wt * om.cos() * yk * r[ch];
                         }
