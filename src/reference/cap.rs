@@ -87,7 +87,7 @@ mod tests {
                 }
             }
             let want = 2.0 * PI * (1.0 - alpha.cos());
-            let tol = if (e as f64).cos() <= alpha.sin() { 1e-4 } else { 1e-10 };
+            let tol = if e.cos() <= alpha.sin() { 1e-4 } else { 1e-10 };
             assert!(((omega - want) / want).abs() < tol, "e={e} α={alpha}: {omega} vs {want}");
         }
     }

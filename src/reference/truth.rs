@@ -304,8 +304,8 @@ impl Setup<'_> {
         }
         for (key, samples) in &self.caps {
             let c = self.cap(key, samples, i, j);
-            for ch in 0..3 {
-                e[ch] += c * key.radiance[ch];
+            for (ec, r) in e.iter_mut().zip(&key.radiance) {
+                *ec += c * r;
             }
         }
         vec![e]
