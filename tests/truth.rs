@@ -1,63 +1,104 @@
-//! The brute-force ground truth (docs/accuracy.md §1): analytic checks of the f64 CPU version
-//! and the GPU version against it.
+//! The brute-force ground truth (docs/accuracy.md §1): analytic checks of the f64 CPU version,
+//! the GPU version against it, and the convergence of the march to the exact intersection.
 
 mod common;
 
+use std::f64::consts::PI;
+
 use common::rough_field;
 use common::scenes::{key_light, rel_l2, scene, sky};
-use hfgi::reference::truth::{lighting_sh, render_truth, TruthSettings};
+use hfgi::reference::truth::{environment_sh, lighting_sh, render_truth, TruthOutput, TruthSettings};
+use hfgi::scene::model::Scene;
 use hfgi::scene::HeightField;
 
 fn flat(w: usize, h: usize, z: f32) -> HeightField {
     HeightField::new("flat", w, h, vec![z; w * h], 16384).unwrap()
 }
 
+const RHO: [f64; 3] = [0.7f32 as f64, 0.6f32 as f64, 0.5f32 as f64]; // the scene's f32 albedo
+
+/// `ρ/π ⟨L, cc_{+z}⟩`: the exit radiance of a flat field under order-n SH lighting `l`.
+fn flat_sh(n: usize, l: &[[f64; 3]]) -> [f64; 3] {
+    let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
+    [0, 1, 2].map(|c| RHO[c] / PI * l.iter().zip(&cc).map(|(a, b)| a[c] * b).sum::<f64>())
+}
+
+/// `ρ/π · L·π·sin²α·sin e` summed over the key lights: a flat field under caps fully above the
+/// horizon.
+fn flat_caps(s: &Scene) -> [f64; 3] {
+    let mut e = [0.0; 3];
+    for k in &s.key_lights {
+        let g = PI * k.angular_radius.sin().powi(2) * k.direction.normalize().z;
+        for c in 0..3 {
+            e[c] += RHO[c] / PI * k.radiance[c] * g;
+        }
+    }
+    e
+}
+
+fn max_rel(t: &TruthOutput, expect: [f64; 3]) -> f64 {
+    t.direct.iter().flat_map(|p| (0..3).map(move |c| (p[c] - expect[c]).abs() / expect[c])).fold(0.0, f64::max)
+}
+
+fn as32(v: &[[f64; 3]]) -> Vec<[f32; 3]> {
+    v.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect()
+}
+
 #[test]
 fn flat_field_exact_reference_equals_the_analytic_value() {
-    // A flat field sees the upper hemisphere: E = Σ_k L_k · (clamped cosine ZH rotated to +z),
-    // exact for order-n lighting (only the first n bands of the clamped cosine meet it).
+    // Exact reference: the environment's SH meets only the first n bands of the clamped
+    // cosine, E = Σ_k L_k cc_k; the key light is its true cap, E = L·π·sin²α·sin e.
     let mut s = scene(flat(8, 8, 2.0));
     s.wrap = true;
     s.environment = sky(4);
     s.key_lights = vec![key_light(40.0, 30.0, 5.0, 30.0)];
     s.gi.bounces = 1;
     let n = s.gi.sh_order;
+    let (env, caps) = (flat_sh(n, &environment_sh(&s)), flat_caps(&s));
+    let expect = [0, 1, 2].map(|c| env[c] + caps[c]);
+    // The SH-visibility reference shades (L ⊛ V_hemisphere) · cc like the pipeline, key light
+    // as its SH: the analytic value includes the order-n truncation of the product.
     let l = lighting_sh(&s);
-    let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
-    let rho = [0.7f32 as f64, 0.6f32 as f64, 0.5f32 as f64]; // the scene's f32 albedo
-    let expect: [f64; 3] =
-        [0, 1, 2].map(|c| rho[c] / std::f64::consts::PI * l.iter().zip(&cc).map(|(a, b)| a[c] * b).sum::<f64>());
-    // The SH-visibility reference shades (L ⊛ V_hemisphere) · cc like the pipeline: the
-    // analytic value includes the order-n truncation of the product.
     let hemi = hfgi::math::zh::rotate(n, &hfgi::math::zh::cap(n, std::f64::consts::FRAC_PI_2), [0.0, 0.0, 1.0]);
     let tri = hfgi::math::triple::triple(n);
+    let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
     let expect_sh: [f64; 3] = [0, 1, 2].map(|c| {
         let lc: Vec<f64> = l.iter().map(|v| v[c]).collect();
         let t = hfgi::math::triple::product(&tri, &lc, &hemi);
-        rho[c] / std::f64::consts::PI * t.iter().zip(&cc).map(|(a, b)| a * b).sum::<f64>()
+        RHO[c] / PI * t.iter().zip(&cc).map(|(a, b)| a * b).sum::<f64>()
     });
     for sh_visibility in [false, true] {
         let expect = if sh_visibility { expect_sh } else { expect };
         let t = render_truth(&s, &TruthSettings { sh_visibility, ..Default::default() }, &mut |_, _| {}).unwrap();
-        let err =
-            t.direct.iter().flat_map(|p| (0..3).map(move |c| (p[c] - expect[c]).abs() / expect[c])).fold(0.0, f64::max);
+        let err = max_rel(&t, expect);
         let ind = t.indirect.iter().flat_map(|p| p.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
         eprintln!("flat field, sh_visibility={sh_visibility}: max relative error {err:.2e}, max indirect {ind:.1e}");
         assert!(err <= 1e-6, "flat field reference off the analytic value by {err:e}");
         assert_eq!(ind, 0.0, "a flat field has no indirect light");
+    }
+    // One key light alone, a small and a wide cap, on a bounded field (border texels see the
+    // same: nothing blocks a flat field).
+    for (elev, radius) in [(40.0, 5.0), (25.0, 20.0), (70.0, 0.5)] {
+        let mut c = scene(flat(6, 5, -3.0));
+        c.environment = hfgi::scene::model::Environment::default();
+        c.key_lights = vec![key_light(elev, 250.0, radius, 10.0)];
+        let t = render_truth(&c, &TruthSettings::default(), &mut |_, _| {}).unwrap();
+        let err = max_rel(&t, flat_caps(&c));
+        eprintln!("flat field, one cap (e = {elev}°, α = {radius}°): max relative error {err:.2e}");
+        assert!(err <= 1e-5, "cap irradiance off L·π·sin²α·sin e by {err:e}");
     }
 }
 
 #[test]
 fn exact_and_sh_visibility_references_differ_by_the_truncation() {
     // On a rough field the two references differ (SH truncation of L ⊛ V and of the cosine
-    // lobe): that difference is the floor the pipeline converges to (CONVENTIONS.md).
+    // lobe, and the caps' SH projection): that difference is the floor the pipeline converges
+    // to (CONVENTIONS.md).
     let mut s = scene(rough_field(12, 12, 4));
     s.gi.bounces = 1;
     let fast = TruthSettings { azimuths: 64, ..Default::default() };
     let exact = render_truth(&s, &fast, &mut |_, _| {}).unwrap();
     let shv = render_truth(&s, &TruthSettings { sh_visibility: true, ..fast }, &mut |_, _| {}).unwrap();
-    let as32 = |v: &[[f64; 3]]| v.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect::<Vec<_>>();
     let d = rel_l2(&as32(&shv.direct), &exact.direct);
     let i = rel_l2(&as32(&shv.indirect), &exact.indirect);
     eprintln!(
@@ -72,38 +113,136 @@ fn exact_and_sh_visibility_references_differ_by_the_truncation() {
 #[test]
 fn gpu_reference_matches_the_cpu_reference() {
     let ctx = common::gpu();
+    // Two bounces and a key light (scene(): elevation 30°, α = 5°), bounded field.
     let mut s = scene(rough_field(20, 16, 8));
     s.gi.bounces = 2;
     s.material.albedo = hfgi::scene::model::Albedo::Constant([0.8, 0.7, 0.6]);
-    for sh_visibility in [false, true] {
-        let settings = TruthSettings { azimuths: 64, sh_visibility, ..Default::default() };
+    let fast = TruthSettings { azimuths: 64, ..Default::default() };
+    let cases = [
+        ("exact", fast),
+        ("SH-visibility", TruthSettings { sh_visibility: true, ..fast }),
+        ("exact, march 1/8", TruthSettings { march: true, ..fast }),
+    ];
+    for (what, settings) in cases {
         let cpu = render_truth(&s, &settings, &mut |_, _| {}).unwrap();
         let mut calls = 0;
         let gpu = hfgi::frame::truth::render_truth_gpu(&ctx, &s, &settings, &mut |_, _| calls += 1).unwrap();
-        let as32 = |v: &[[f64; 3]]| v.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect::<Vec<_>>();
         let (d, i, t) = (
             rel_l2(&as32(&gpu.direct), &cpu.direct),
             rel_l2(&as32(&gpu.indirect), &cpu.indirect),
             rel_l2(&as32(&gpu.total), &cpu.total),
         );
-        eprintln!("sh_visibility={sh_visibility}: GPU vs CPU reference: direct {d:.2e}, indirect {i:.2e}, total {t:.2e} ({calls} progress calls)");
+        eprintln!(
+            "{what}: GPU vs CPU reference: direct {d:.2e}, indirect {i:.2e}, total {t:.2e} ({calls} progress calls)"
+        );
         assert!(d.max(i).max(t) <= 1e-4, "GPU and CPU references differ: {d:e} {i:e} {t:e}");
         assert!(calls >= 3, "progress is reported");
     }
-    // The flat field on the GPU (f32): the analytic value to 1e-6.
+    // Periodic, steep and with a pole cap: the wrap path and the full-circle cap samples.
+    let mut p = scene(rough_field(16, 12, 3));
+    p.wrap = true;
+    p.texel_size = 0.5;
+    p.gi.bounces = 1;
+    p.key_lights.push(key_light(75.0, 10.0, 20.0, 2.0));
+    let cpu = render_truth(&p, &fast, &mut |_, _| {}).unwrap();
+    let gpu = hfgi::frame::truth::render_truth_gpu(&ctx, &p, &fast, &mut |_, _| {}).unwrap();
+    let (d, i) = (rel_l2(&as32(&gpu.direct), &cpu.direct), rel_l2(&as32(&gpu.indirect), &cpu.indirect));
+    eprintln!("wrap, pole cap: GPU vs CPU reference: direct {d:.2e}, indirect {i:.2e}");
+    assert!(d.max(i) <= 1e-4, "GPU and CPU references differ (wrap): {d:e} {i:e}");
+    // The flat field on the GPU (f32): the analytic value, environment and a key light cap.
     let mut f = scene(flat(16, 16, 1.0));
     f.wrap = true;
-    f.key_lights.clear();
     f.environment = sky(4);
-    let n = f.gi.sh_order;
-    let l = lighting_sh(&f);
-    let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
-    let rho = [0.7f32 as f64, 0.6f32 as f64, 0.5f32 as f64];
-    let expect: [f64; 3] =
-        [0, 1, 2].map(|c| rho[c] / std::f64::consts::PI * l.iter().zip(&cc).map(|(a, b)| a[c] * b).sum::<f64>());
+    f.key_lights = vec![key_light(40.0, 30.0, 5.0, 30.0)];
+    let (env, caps) = (flat_sh(f.gi.sh_order, &environment_sh(&f)), flat_caps(&f));
+    let expect = [0, 1, 2].map(|c| env[c] + caps[c]);
     let g = hfgi::frame::truth::render_truth_gpu(&ctx, &f, &TruthSettings::default(), &mut |_, _| {}).unwrap();
-    let err =
-        g.direct.iter().flat_map(|p| (0..3).map(move |c| (p[c] - expect[c]).abs() / expect[c])).fold(0.0, f64::max);
-    eprintln!("flat field on the GPU (f32 integration): max relative error {err:.2e}");
-    assert!(err <= 1e-6, "GPU flat-field reference off by {err:e}");
+    let err = max_rel(&g, expect);
+    eprintln!("flat field on the GPU (f32 integration), sky + cap: max relative error {err:.2e}");
+    assert!(err <= 1e-5, "GPU flat-field reference off by {err:e}");
+}
+
+/// A `w × h` field from `f(i, j)`.
+fn field(name: &str, w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> HeightField {
+    HeightField::new(name, w, h, (0..w * h).map(|k| f(k % w, k / w)).collect(), 16384).unwrap()
+}
+
+/// Step halving on a sharp field (CPU, f64): the march at 1/8, 1/16, 1/32 texel against the
+/// exact intersection (32 azimuths, the same for both: the step's error alone), then the exact
+/// reference at the defaults against 2× azimuths and 2× nodes (its own limit). Prints the
+/// table; returns nothing, asserts the halving and the limit.
+fn step_halving(name: &str, s: &Scene) {
+    let started = std::time::Instant::now();
+    let run = |t: TruthSettings| render_truth(s, &t, &mut |_, _| {}).unwrap();
+    let few = TruthSettings { azimuths: 32, ..Default::default() };
+    let exact = run(few);
+    let err = |o: &TruthOutput, r: &TruthOutput| {
+        (rel_l2(&as32(&o.direct), &r.direct), rel_l2(&as32(&o.indirect), &r.indirect))
+    };
+    let mut table = format!(
+        "{name} ({}×{}, {} bounces): march vs exact intersection, 32 azimuths\n",
+        s.field.width(),
+        s.field.height(),
+        s.gi.bounces
+    );
+    table += "| step | direct | indirect |\n|---|---|---|\n";
+    let mut errs = Vec::new();
+    for step in [0.125, 0.0625, 0.03125] {
+        let (d, i) = err(&run(TruthSettings { march: true, step, ..few }), &exact);
+        table += &format!("| 1/{} | {:.3}% | {:.3}% |\n", (1.0 / step) as u32, d * 100.0, i * 100.0);
+        errs.push((d, i));
+    }
+    let base = run(TruthSettings::default());
+    let fine = run(TruthSettings { azimuths: 512, nodes: 32, cap_nodes: 128, ..Default::default() });
+    let (ld, li) = err(&base, &fine);
+    table += &format!(
+        "exact (256 azimuths, 16 nodes) vs its limit (512 azimuths, 32 nodes): direct {:.3}%, indirect {:.3}% ({:.1} s)",
+        ld * 100.0,
+        li * 100.0,
+        started.elapsed().as_secs_f64()
+    );
+    eprintln!("{table}");
+    for k in 0..2 {
+        let e: Vec<f64> = errs.iter().map(|v| if k == 0 { v.0 } else { v.1 }).collect();
+        assert!(e[0] > e[1] && e[1] > e[2], "{name}: the march's error does not fall: {e:?}");
+        for r in [e[0] / e[1], e[1] / e[2]] {
+            assert!((1.5..=3.0).contains(&r), "{name}: halving the step divides the error by {r:.2}: {e:?}");
+        }
+    }
+    assert!(ld <= 0.005 && li <= 0.01, "{name}: exact reference not converged: direct {ld:e}, indirect {li:e}");
+}
+
+fn sharp(field: HeightField, texel_size: f64) -> Scene {
+    let mut s = scene(field);
+    s.texel_size = texel_size;
+    s.gi.bounces = 2;
+    s.material.albedo = hfgi::scene::model::Albedo::Constant([0.8, 0.7, 0.6]);
+    s
+}
+
+#[test]
+fn convergence_one_texel_cliffs() {
+    // Diagonal terraces: a one-texel cliff of 2 every 5 texels.
+    let f = field("terraces", 32, 32, |i, j| 2.0 * ((i as f32 + 0.6 * j as f32) / 5.0).floor());
+    step_halving("one-texel cliffs (terraces)", &sharp(f, 1.0));
+}
+
+#[test]
+fn convergence_thin_spikes() {
+    // Low hills with two one-texel spikes.
+    let base = rough_field(32, 32, 11);
+    let f = field("spikes", 32, 32, |i, j| match (i, j) {
+        (17, 15) => 12.0,
+        (24, 8) => 6.0,
+        _ => 0.15 * base.data()[j * 32 + i],
+    });
+    step_halving("thin spikes", &sharp(f, 1.0));
+}
+
+#[test]
+fn convergence_steep_dem() {
+    // Non-square, texel size 4, negative heights, slopes up to ~5:1.
+    let base = rough_field(40, 28, 5);
+    let f = field("steep", 40, 28, |i, j| 8.0 * base.data()[j * 40 + i] - 150.0);
+    step_halving("steep DEM", &sharp(f, 4.0));
 }

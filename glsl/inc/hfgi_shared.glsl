@@ -119,20 +119,26 @@ struct hfgi_WaterPush {
     vec4 drops[4];      // (x, y, amplitude, radius), texels
 };
 
-// Push constants of the ground-truth reference (glsl/reference/truth.comp.glsl). 48 bytes.
+// Push constants of the ground-truth reference (glsl/reference/truth.comp.glsl). 96 bytes.
 struct hfgi_TruthPush {
     uint width;
     uint height;
     uint wrap;
     uint azimuths;      // A, uniformly spaced
-    float step;         // march step, texels
+    float step;         // march step, texels (march = 1 only)
     float texel_size;
     uint sh_visibility; // 1: project to SH (V or U), 0: exact irradiance
     uint indirect;      // 1: blocked directions with the source radiance, 0: open directions
     uint row_offset;    // first row of this dispatch
     uint rows;          // rows in this dispatch
-    uint azimuth_first; // azimuths [first, first + count) of `azimuths` in this dispatch
-    uint azimuth_count;
+    uint azimuth_first; // azimuths [first, first + count) of `azimuths` (cap = 0) or samples
+    uint azimuth_count; //   [first, first + count) of the cap buffer (cap = 1) in this dispatch
+    uint march;         // 1: march at `step`, 0: exact intersection with the bilinear patches
+    uint cap;           // 1: this dispatch integrates the key light cap_* (exact, direct)
+    uint accumulate;    // 1: add to the output, 0: overwrite it (a pass's first dispatch)
+    uint pad0;
+    vec4 cap_dir;       // key light: unit direction (xyz), cos α (w)
+    vec4 cap_radiance;  // key light: rgb radiance, sin α (w)
 };
 
 #endif

@@ -1,10 +1,15 @@
 #version 460
 // Brute-force ground truth (CONVENTIONS.md "Accuracy"; docs/accuracy.md §1), one invocation per
-// texel of rows [row_offset, row_offset + rows). Per azimuth φ_a = 2π(a + ½)/A the bilinear
-// surface is marched at `step`-texel steps (rays leaving the domain escape; with wrap the march
-// ends after max(W, H) texels). Elevation integrals: Gauss–Legendre on [max(ω_hor, ω_t), π/2]
-// (open directions: lighting) and on [ω_t, ω_hor] (blocked directions: the previous bounce's
-// radiance at the first hit), ω_t the exact tangent elevation. Outputs per texel:
+// texel of rows [row_offset, row_offset + rows). Per azimuth the ray from the receiver vertex is
+// intersected exactly with the bilinear patches (a DDA over cells, one quadratic per cell;
+// src/reference/ray.rs is the f64 twin), or, with `march`, marched at `step`-texel samples.
+// Rays leaving the domain escape; with wrap they end after max(W, H) texels. Elevation
+// integrals: Gauss–Legendre on [max(ω_hor, ω_t), π/2] (open directions: lighting) and on
+// [ω_t, ω_hor] (blocked directions: the previous bounce's radiance at the first hit), ω_t the
+// exact tangent elevation. Azimuths: the A uniform ones (cap = 0), or the samples (φ, weight)
+// of one key light's cap from binding 6 (cap = 1: exact reference, direct light; the cap is
+// cap_dir/cap_radiance, its elevation window on each azimuth intersected with the open
+// interval). Outputs per texel:
 //   exact mode:  E = ∫ L_in max(N·ω, 0) dω (rgb) in element 0;
 //   SH mode:     V_k = ∫_open y_k dω (direct, .x) or U_k = ∫_blocked L_hit y_k dω (indirect, rgb).
 // The host finishes the shading in f64 (ρ/π, L ⊛ V, clamped-cosine ZH).
@@ -20,6 +25,7 @@ layout(std430, binding = 2) readonly buffer Source { vec4 hfgi_source[]; };    /
 layout(std430, binding = 3) readonly buffer Gauss { vec2 hfgi_gauss[]; };      // nodes, weights on [-1, 1]
 layout(std430, binding = 4) readonly buffer Consts { float hfgi_klm[64]; };
 layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   // texel × n² (accumulated over azimuth chunks)
+layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // key-light azimuth samples (φ, weight)
 layout(push_constant) uniform Push { hfgi_TruthPush pc; };
 #include "hfgi_sh.glsl"
 
@@ -82,7 +88,228 @@ uint march_bound(vec2 p, vec2 d) {
     return uint(max(t, 0.0) / pc.step) + 2u;
 }
 
+// ---- Exact intersection with the bilinear patches (src/reference/ray.rs) ----
+
+// The ray inside one cell: t in [t0, t1] texels, height relative to the receiver
+// F(t0 + τ) = (a τ + b) τ + c.
+struct Piece { float t0; float t1; float a; float b; float c; };
+
+// DDA state: integer lines are crossed at t = kx/|d.x| and t = ky/|d.y| (p is a vertex).
+struct Ray { ivec2 p; vec2 d; float h0; float t_end; vec2 inv; float kx; float ky; float ta; };
+
+float ray_end(vec2 p, vec2 d) {
+    if (pc.wrap != 0u) return float(max(pc.width, pc.height));
+    vec2 hi = vec2(float(pc.width - 1u), float(pc.height - 1u));
+    float tx = d.x > 0.0 ? (hi.x - p.x) / d.x : (d.x < 0.0 ? p.x / -d.x : 1e30);
+    float ty = d.y > 0.0 ? (hi.y - p.y) / d.y : (d.y < 0.0 ? p.y / -d.y : 1e30);
+    return max(min(tx, ty), 0.0);
+}
+
+Ray ray_start(ivec2 p, vec2 d, float h0) {
+    Ray r;
+    r.p = p; r.d = d; r.h0 = h0;
+    r.t_end = ray_end(vec2(p), d);
+    r.inv = vec2(abs(d.x) > 1e-12 ? 1.0 / abs(d.x) : 1e30, abs(d.y) > 1e-12 ? 1.0 / abs(d.y) : 1e30);
+    r.kx = 1.0; r.ky = 1.0; r.ta = 0.0;
+    return r;
+}
+
+// A bound on the pieces of a ray (each crossing of an integer line starts one). Loops get an
+// explicit trip count: lavapipe cuts unbounded loops short.
+uint piece_bound(Ray r) {
+    return uint(min(r.t_end, 1e6) * (abs(r.d.x) + abs(r.d.y))) + 3u;
+}
+
+// The quadratic on [ta, tb], inside the cell holding its middle; corner heights relative to
+// the receiver first (f32 robustness).
+Piece cell_piece(Ray r, float ta, float tb) {
+    ivec2 c = ivec2(floor(vec2(r.p) + (0.5 * (ta + tb)) * r.d));
+    if (pc.wrap == 0u) c = clamp(c, ivec2(0), max(ivec2(int(pc.width) - 2, int(pc.height) - 2), ivec2(0)));
+    float g00 = height_at(c) - r.h0, g10 = height_at(c + ivec2(1, 0)) - r.h0;
+    float g01 = height_at(c + ivec2(0, 1)) - r.h0, g11 = height_at(c + ivec2(1, 1)) - r.h0;
+    float ca = g10 - g00, cb = g01 - g00, cc = (g00 - g10) + (g11 - g01);
+    vec2 uv = vec2(r.p - c) + ta * r.d;
+    Piece q;
+    q.t0 = ta; q.t1 = tb;
+    q.a = cc * r.d.x * r.d.y;
+    q.b = ca * r.d.x + cb * r.d.y + cc * (uv.x * r.d.y + uv.y * r.d.x);
+    q.c = ta > 0.0 ? g00 + ca * uv.x + cb * uv.y + cc * uv.x * uv.y : 0.0;
+    return q;
+}
+
+// The next piece, false when the ray has ended.
+bool ray_next(inout Ray r, out Piece q) {
+    q = Piece(0.0, 0.0, 0.0, 0.0, 0.0);
+    if (r.ta >= r.t_end) return false;
+    float tx = r.kx * r.inv.x, ty = r.ky * r.inv.y;
+    float tb = min(min(tx, ty), r.t_end);
+    q = cell_piece(r, r.ta, tb);
+    if (tx <= tb) r.kx += 1.0;
+    if (ty <= tb) r.ky += 1.0;
+    r.ta = tb;
+    return true;
+}
+
+float piece_value(Piece q, float tau) { return (q.a * tau + q.b) * tau + q.c; }
+
+// sup F(t)/t over the piece (first piece: the limit t → 0, the surface's slope, included) and
+// the τ where it is reached; F/t = a t + b' + c'/t has its one stationary point at √(c'/a).
+vec2 piece_max(Piece q) {
+    float len = q.t1 - q.t0;
+    vec2 best = vec2(piece_value(q, len) / q.t1, len);
+    float start = q.t0 > 0.0 ? q.c / q.t0 : q.b;
+    if (start >= best.x) best = vec2(start, 0.0);
+    float cp = (q.a * q.t0 - q.b) * q.t0 + q.c;
+    if (q.a < 0.0 && cp < 0.0) {
+        float ts = sqrt(cp / q.a);
+        if (ts > q.t0 && ts < q.t1) {
+            float s = piece_value(q, ts - q.t0) / ts;
+            if (s > best.x) best = vec2(s, ts - q.t0);
+        }
+    }
+    return best;
+}
+
+// The smallest τ in [0, tau_max] with F ≥ k t (G(τ) = aτ² + (b − k)τ + (c − k t0) rises through
+// zero there; robust quadratic formula).
+float first_reach(Piece q, float k, float tau_max) {
+    float b2 = q.b - k, c2 = q.c - k * q.t0;
+    if (c2 >= 0.0 && (q.t0 > 0.0 || b2 >= 0.0)) return 0.0;
+    float sq = sqrt(max(b2 * b2 - 4.0 * q.a * c2, 0.0));
+    float r;
+    if (b2 >= 0.0) {
+        float den = -b2 - sq;
+        r = den < 0.0 ? 2.0 * c2 / den : 0.0;
+    } else {
+        r = q.a != 0.0 ? (sq - b2) / (2.0 * q.a) : tau_max;
+    }
+    return clamp(r, 0.0, tau_max);
+}
+
+// Horizon elevation from vertex p along d (−π/2 where the ray leaves the domain at once).
+float horizon(ivec2 p, vec2 d, float h0) {
+    float hor = -1.5707963267948966;
+    if (pc.march != 0u) {
+        uint bound = march_bound(vec2(p), d);
+        for (uint k = 1u; k <= bound; ++k) {
+            float t = float(k) * pc.step;
+            vec2 q = vec2(p) + t * d;
+            if (!inside(q, t)) break;
+            hor = max(hor, atan((bilinear_h(q) - h0) / (t * pc.texel_size)));
+        }
+        return hor;
+    }
+    Ray r = ray_start(p, d, h0);
+    uint bound = piece_bound(r);
+    float slope = -1e30;
+    Piece q;
+    for (uint k = 0u; k < bound; ++k) {
+        if (!ray_next(r, q)) break;
+        slope = max(slope, piece_max(q).x);
+    }
+    return slope > -1e30 ? atan(slope / pc.texel_size) : hor;
+}
+
 vec3 hfgi_acc[HFGI_N2];
+
+// Blocked node e of [tangent, hor] (elevation om) hits at `hit`: add its radiance.
+void add_hit(int e, float mid, float half_w, vec2 d, vec3 N, float dphi, vec2 hit) {
+    float om = mid + half_w * hfgi_gauss[e].x;
+    vec3 r = bilinear_source(hit);
+    float wt = half_w * hfgi_gauss[e].y * cos(om) * dphi;
+    vec3 dir = vec3(cos(om) * d, sin(om));
+    if (pc.sh_visibility != 0u) {
+        hfgi_sh_eval(dir);
+        for (int c = 0; c < HFGI_N2; ++c) hfgi_acc[c] += wt * hfgi_y[c] * r;
+    } else {
+        hfgi_acc[0] += wt * max(dot(N, dir), 0.0) * r;
+    }
+}
+
+// Blocked directions of one azimuth: nodes ascend and the running maximum sweeps them; a
+// node's first hit is where the surface first reaches it (march: the sample that lifts the
+// maximum past it; exact: the root in the first piece whose maximum reaches it).
+void bounce_azimuth(ivec2 p, vec2 d, float h0, vec3 N, float dphi, float hor, float tangent) {
+    float half_w = 0.5 * (hor - tangent), mid = 0.5 * (hor + tangent);
+    int e = 0;
+    if (pc.march != 0u) {
+        float running = -1.5707963267948966;
+        uint bound = march_bound(vec2(p), d);
+        vec2 hit = vec2(p);
+        uint k = 1u;
+        for (; e < HFGI_NODES; ++e) {
+            float om = mid + half_w * hfgi_gauss[e].x;
+            while (running < om && k <= bound) {
+                float t = float(k) * pc.step;
+                vec2 q = vec2(p) + t * d;
+                if (!inside(q, t)) break;
+                k += 1u;
+                float w_k = atan((bilinear_h(q) - h0) / (t * pc.texel_size));
+                if (w_k > running) { running = w_k; hit = q; }
+            }
+            if (running < om) break;
+            add_hit(e, mid, half_w, d, N, dphi, hit);
+        }
+        return;
+    }
+    Ray r = ray_start(p, d, h0);
+    uint bound = piece_bound(r);
+    float running = -1e30;
+    Piece q;
+    for (uint it = 0u; it < bound && e < HFGI_NODES; ++it) {
+        if (!ray_next(r, q)) break;
+        vec2 m = piece_max(q);
+        float top = max(running, m.x);
+        for (; e < HFGI_NODES; ++e) {
+            float k = tan(mid + half_w * hfgi_gauss[e].x) * pc.texel_size;
+            if (k > top) break;
+            float t = q.t0 + first_reach(q, k, m.y);
+            add_hit(e, mid, half_w, d, N, dphi, vec2(p) + t * d);
+        }
+        running = top;
+    }
+}
+
+// Open directions of one uniform azimuth: the environment (exact) or V (SH mode).
+void direct_azimuth(vec2 d, vec3 N, float dphi, float hor, float tangent) {
+    bool sh_mode = pc.sh_visibility != 0u;
+    float lo = sh_mode ? hor : max(hor, tangent);
+    float half_w = 0.5 * (1.5707963267948966 - lo), mid = 0.5 * (1.5707963267948966 + lo);
+    for (int e = 0; e < HFGI_NODES; ++e) {
+        float om = mid + half_w * hfgi_gauss[e].x;
+        float wt = half_w * hfgi_gauss[e].y * cos(om) * dphi;
+        vec3 dir = vec3(cos(om) * d, sin(om));
+        hfgi_sh_eval(dir);
+        if (sh_mode) {
+            for (int k = 0; k < HFGI_N2; ++k) hfgi_acc[k].x += wt * hfgi_y[k];
+        } else {
+            vec3 L = vec3(0.0);
+            for (int k = 0; k < HFGI_N2; ++k) L += hfgi_light[k].rgb * hfgi_y[k];
+            hfgi_acc[0] += wt * max(dot(N, dir), 0.0) * L;
+        }
+    }
+}
+
+// The key light's cap on one azimuth sample (weight wphi): its elevation window
+// |ω − ω_c| ≤ δ (src/reference/cap.rs) intersected with the open interval [max(ω_hor, ω_t), π/2].
+void cap_azimuth(vec2 d, vec3 N, float wphi, float hor, float tangent) {
+    vec3 l = pc.cap_dir.xyz;
+    float cos_a = pc.cap_dir.w, sin_a = pc.cap_radiance.w;
+    float dl = dot(d, l.xy), cr = d.x * l.y - d.y * l.x;
+    float x = sin_a * sin_a - cr * cr;
+    if (x < 0.0) return;
+    float R = length(vec2(dl, l.z));
+    float delta = 2.0 * asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
+    float wc = atan(l.z, dl);
+    float lo = max(max(wc - delta, hor), tangent), hi = min(wc + delta, 1.5707963267948966);
+    if (hi <= lo) return;
+    float half_w = 0.5 * (hi - lo), mid = 0.5 * (hi + lo);
+    for (int e = 0; e < HFGI_NODES; ++e) {
+        float om = mid + half_w * hfgi_gauss[e].x;
+        vec3 dir = vec3(cos(om) * d, sin(om));
+        hfgi_acc[0] += (wphi * half_w * hfgi_gauss[e].y * cos(om) * max(dot(N, dir), 0.0)) * pc.cap_radiance.rgb;
+    }
+}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.x, gl_GlobalInvocationID.y + pc.row_offset);
@@ -93,73 +320,24 @@ void main() {
     bool indirect = pc.indirect != 0u;
     for (int k = 0; k < HFGI_N2; ++k) hfgi_acc[k] = vec3(0.0);
     float dphi = 6.283185307179586 / float(pc.azimuths);
-    // Azimuths [azimuth_first, azimuth_first + azimuth_count) of A: lavapipe truncates an
-    // invocation's loops after some ten thousand iterations, so the host splits A into chunks.
+    // Azimuths [azimuth_first, azimuth_first + azimuth_count): lavapipe truncates an
+    // invocation's loops after 65535 iterations, so the host splits them into chunks.
     for (uint a = pc.azimuth_first; a < pc.azimuth_first + pc.azimuth_count; ++a) {
-        float phi = (float(a) + 0.5) * dphi;
+        float phi = pc.cap != 0u ? hfgi_caps[a].x : (float(a) + 0.5) * dphi;
         vec2 d = vec2(cos(phi), sin(phi));
-        // Horizon: the largest blocking angle along the march.
-        float hor = -1.5707963267948966;
-        uint bound = march_bound(vec2(p), d);
-        for (uint k = 1u; k <= bound; ++k) {
-            float t = float(k) * pc.step;
-            vec2 q = vec2(p) + t * d;
-            if (!inside(q, t)) break;
-            hor = max(hor, atan((bilinear_h(q) - h0) / (t * pc.texel_size)));
-        }
+        float hor = horizon(p, d, h0);
         float tangent = atan(-(N.x * d.x + N.y * d.y), N.z);
-        if (!indirect) {
-            float lo = sh_mode ? hor : max(hor, tangent);
-            float half_w = 0.5 * (1.5707963267948966 - lo), mid = 0.5 * (1.5707963267948966 + lo);
-            for (int e = 0; e < HFGI_NODES; ++e) {
-                float om = mid + half_w * hfgi_gauss[e].x;
-                float wt = half_w * hfgi_gauss[e].y * cos(om) * dphi;
-                vec3 dir = vec3(cos(om) * d, sin(om));
-                hfgi_sh_eval(dir);
-                if (sh_mode) {
-                    for (int k = 0; k < HFGI_N2; ++k) hfgi_acc[k].x += wt * hfgi_y[k];
-                } else {
-                    vec3 L = vec3(0.0);
-                    for (int k = 0; k < HFGI_N2; ++k) L += hfgi_light[k].rgb * hfgi_y[k];
-                    hfgi_acc[0] += wt * max(dot(N, dir), 0.0) * L;
-                }
-            }
+        if (pc.cap != 0u) {
+            cap_azimuth(d, N, hfgi_caps[a].y, hor, tangent);
+        } else if (!indirect) {
+            direct_azimuth(d, N, dphi, hor, tangent);
         } else if (hor > tangent) {
-            // Blocked directions: nodes ascend and the running maximum of the blocking angle
-            // sweeps them; a node's first hit is the sample that lifts the maximum past it.
-            float half_w = 0.5 * (hor - tangent), mid = 0.5 * (hor + tangent);
-            float running = -1.5707963267948966;
-            uint k = 1u;
-            vec2 hit = vec2(p);
-            for (int e = 0; e < HFGI_NODES; ++e) {
-                float om = mid + half_w * hfgi_gauss[e].x;
-                bool found = running >= om;
-                while (!found && k <= bound) {
-                    float t = float(k) * pc.step;
-                    vec2 q = vec2(p) + t * d;
-                    if (!inside(q, t)) break;
-                    k += 1u;
-                    float w_k = atan((bilinear_h(q) - h0) / (t * pc.texel_size));
-                    if (w_k > running) { running = w_k; hit = q; }
-                    found = running >= om;
-                }
-                if (!found) break;
-                vec3 r = bilinear_source(hit);
-                float wt = half_w * hfgi_gauss[e].y * cos(om) * dphi;
-                vec3 dir = vec3(cos(om) * d, sin(om));
-                if (sh_mode) {
-                    hfgi_sh_eval(dir);
-                    for (int c = 0; c < HFGI_N2; ++c) hfgi_acc[c] += wt * hfgi_y[c] * r;
-                } else {
-                    hfgi_acc[0] += wt * max(dot(N, dir), 0.0) * r;
-                }
-            }
+            bounce_azimuth(p, d, h0, N, dphi, hor, tangent);
         }
     }
     uint base = (uint(p.y) * pc.width + uint(p.x)) * uint(HFGI_N2);
-    bool first = pc.azimuth_first == 0u;
     for (int k = 0; k < (sh_mode ? HFGI_N2 : 1); ++k) {
-        vec3 prev = first ? vec3(0.0) : hfgi_out[base + uint(k)].rgb;
+        vec3 prev = pc.accumulate != 0u ? hfgi_out[base + uint(k)].rgb : vec3(0.0);
         hfgi_out[base + uint(k)] = vec4(prev + hfgi_acc[k], 0.0);
     }
 }

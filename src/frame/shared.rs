@@ -223,9 +223,21 @@ pub struct TruthPush {
     /// This dispatch integrates azimuths `[azimuth_first, azimuth_first + azimuth_count)`.
     pub azimuth_first: u32,
     pub azimuth_count: u32,
+    /// 1: march at `step`; 0: exact intersection with the bilinear patches.
+    pub march: u32,
+    /// 1: the dispatch integrates the key light `cap_*` over the cap-sample buffer's entries
+    /// `[azimuth_first, azimuth_first + azimuth_count)` (exact reference, direct light).
+    pub cap: u32,
+    /// 1: add to the output buffer; 0: overwrite it (the first dispatch of a pass).
+    pub accumulate: u32,
+    pub pad0: u32,
+    /// Key light: unit direction, `cos α` in `w`.
+    pub cap_dir: [f32; 4],
+    /// Key light: RGB radiance, `sin α` in `w`.
+    pub cap_radiance: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<TruthPush>() == 48);
+const _: () = assert!(std::mem::size_of::<TruthPush>() == 96);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);

@@ -6,6 +6,12 @@
 //! the next. Work is split into bands of rows, one submission each, so that a long reference
 //! reports progress and never holds the queue for long.
 //!
+//! Key lights of the exact reference are true caps: the host computes each cap's azimuth
+//! samples `(φ, weight)` ([`crate::reference::cap::cap_azimuths`]) into one buffer (binding 6),
+//! and a direct pass is the environment's dispatches over the uniform azimuths followed, per key
+//! light, by dispatches over that light's samples with its direction, `cos α`, `sin α` and
+//! radiance in the push constants (`cap = 1`), all accumulating into the output buffer.
+//!
 //! This is a measuring tool, not a frame pass: it owns its buffers and submits on its own
 //! (`Context::submit_and_wait`).
 
@@ -16,7 +22,7 @@ use super::shared::TruthPush;
 use crate::error::Result;
 use crate::math::quadrature::gauss_legendre;
 use crate::reference::direct::normals;
-use crate::reference::truth::{albedo, lighting_sh, Finisher, TruthOutput, TruthSettings};
+use crate::reference::truth::{albedo, environment_sh, key_caps, lighting_sh, Finisher, TruthOutput, TruthSettings};
 use crate::scene::model::Scene;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -30,12 +36,25 @@ pub const STAGE_TRUTH: &str = "reference.truth";
 /// azimuth integral is accumulated over dispatches that stay well below that.
 pub const LOOP_BUDGET: u64 = 40_000;
 
-/// Azimuths per dispatch for a `w × h` field: the march (twice for a bounce) plus the
-/// Gauss–Legendre nodes with their SH loops must fit [`LOOP_BUDGET`].
+/// Loop iterations of one ray: pieces of the exact intersection (one per crossing of an integer
+/// line: at most `W + H` inside the domain, `√2·max(W, H)` over a periodic one) or march steps.
+pub fn ray_iterations(w: usize, h: usize, wrap: bool, settings: &TruthSettings) -> u64 {
+    let side = w.max(h) as f64;
+    if settings.march {
+        let reach = side * if wrap { 1.0 } else { std::f64::consts::SQRT_2 };
+        (reach / settings.step).ceil() as u64 + 2
+    } else if wrap {
+        (side * std::f64::consts::SQRT_2).ceil() as u64 + 3
+    } else {
+        (w + h) as u64 + 3
+    }
+}
+
+/// Azimuths per dispatch for a `w × h` field: the ray (twice for a bounce: horizon, then the
+/// sweep of the blocked nodes) plus the Gauss–Legendre nodes with their SH loops must fit
+/// [`LOOP_BUDGET`]. Cap samples (one ray and the nodes) use the same chunk.
 pub fn azimuth_chunk(w: usize, h: usize, wrap: bool, settings: &TruthSettings, n: usize) -> u32 {
-    let reach = w.max(h) as f64 * if wrap { 1.0 } else { std::f64::consts::SQRT_2 };
-    let march = (reach / settings.step).ceil() as u64 + 2;
-    let per_azimuth = 2 * march + settings.nodes as u64 * (3 * (n * n) as u64 + 16) + 4;
+    let per_azimuth = 2 * ray_iterations(w, h, wrap, settings) + settings.nodes as u64 * (3 * (n * n) as u64 + 16) + 4;
     (LOOP_BUDGET / per_azimuth).clamp(1, 64) as u32
 }
 
@@ -50,6 +69,54 @@ pub fn render_truth_gpu(
     render_truth_gpu_timed(ctx, scene, settings, progress).map(|(o, _)| o)
 }
 
+/// The push constants of every dispatch of one pass over rows `[row, row + rows)` (texel-wide
+/// fields set, `indirect`/rows left to the caller): the environment's (or the bounce's)
+/// uniform azimuths in chunks, then, for the exact direct light, each key light's samples.
+fn pass_pushes(scene: &Scene, settings: &TruthSettings, indirect: bool, chunk: u32) -> Vec<TruthPush> {
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let base = TruthPush {
+        width: w as u32,
+        height: h as u32,
+        wrap: scene.wrap as u32,
+        azimuths: settings.azimuths,
+        step: settings.step as f32,
+        texel_size: scene.texel_size as f32,
+        sh_visibility: settings.sh_visibility as u32,
+        indirect: indirect as u32,
+        march: settings.march as u32,
+        accumulate: 1,
+        ..Default::default()
+    };
+    let mut out = Vec::new();
+    let mut add = |push: TruthPush, first: u32, count: u32| {
+        let mut f = first;
+        while f < first + count {
+            let c = chunk.min(first + count - f);
+            out.push(TruthPush { azimuth_first: f, azimuth_count: c, ..push });
+            f += c;
+        }
+    };
+    add(base, 0, settings.azimuths);
+    if !indirect {
+        let mut offset = 0u32;
+        for (key, samples) in key_caps(scene, settings) {
+            let l = key.direction.normalize();
+            let (sin_a, cos_a) = key.angular_radius.sin_cos();
+            let r = key.radiance;
+            let push = TruthPush {
+                cap: 1,
+                cap_dir: [l.x as f32, l.y as f32, l.z as f32, cos_a as f32],
+                cap_radiance: [r[0] as f32, r[1] as f32, r[2] as f32, sin_a as f32],
+                ..base
+            };
+            add(push, offset, samples.len() as u32);
+            offset += samples.len() as u32;
+        }
+    }
+    out[0].accumulate = 0;
+    out
+}
+
 /// [`render_truth_gpu`] plus the GPU time of all its dispatches in milliseconds (the sum of
 /// the `reference.truth` timestamp scopes; `None` where the queue has no timestamps).
 pub fn render_truth_gpu_timed(
@@ -61,27 +128,31 @@ pub fn render_truth_gpu_timed(
     settings.validate()?;
     scene.gi.validate()?;
     let n = scene.gi.sh_order;
-    let n2 = n * n;
     let (w, h) = (scene.field.width(), scene.field.height());
-    let light = lighting_sh(scene);
+    let light = if settings.sh_visibility { lighting_sh(scene) } else { environment_sh(scene) };
     let (gx, gw) = gauss_legendre(settings.nodes as usize);
     let gauss: Vec<[f32; 2]> = gx.iter().zip(&gw).map(|(x, wt)| [*x as f32, *wt as f32]).collect();
     let light32: Vec<[f32; 4]> = light.iter().map(|l| [l[0] as f32, l[1] as f32, l[2] as f32, 0.0]).collect();
+    let mut caps: Vec<[f32; 2]> =
+        key_caps(scene, settings).iter().flat_map(|(_, s)| s.iter().map(|(p, wt)| [*p as f32, *wt as f32])).collect();
+    if caps.is_empty() {
+        caps.push([0.0; 2]);
+    }
     let consts = super::shade::constants(n, 1.0, 0);
     let usage =
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
     let mut bufs: Vec<Buffer> = Vec::new();
     let mut pipe: Option<ComputePipeline> = None;
     let mut timer = StageTimer::new(ctx, 1)?;
-    let mut gpu_ms = Some(0.0);
-    let result = (|| -> Result<TruthOutput> {
+    let result = (|| -> Result<(TruthOutput, Option<f64>)> {
         for (name, bytes) in [
             ("hfgi.truth.heights", (w * h * 4) as u64),
-            ("hfgi.truth.light", (n2 * 16) as u64),
+            ("hfgi.truth.light", (n * n * 16) as u64),
             ("hfgi.truth.source", (w * h * 16) as u64),
             ("hfgi.truth.gauss", (gauss.len() * 8) as u64),
             ("hfgi.truth.consts", (consts.len() * 4) as u64),
-            ("hfgi.truth.out", (w * h * n2 * 16) as u64),
+            ("hfgi.truth.out", (w * h * n * n * 16) as u64),
+            ("hfgi.truth.caps", (caps.len() * 8) as u64),
         ] {
             bufs.push(Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)?);
         }
@@ -89,93 +160,111 @@ pub fn render_truth_gpu_timed(
         memory::upload(ctx, &bufs[1], 0, bytemuck::cast_slice(&light32))?;
         memory::upload(ctx, &bufs[3], 0, bytemuck::cast_slice(&gauss))?;
         memory::upload(ctx, &bufs[4], 0, bytemuck::cast_slice(&consts))?;
+        memory::upload(ctx, &bufs[6], 0, bytemuck::cast_slice(&caps))?;
         let p = pipe.insert(ComputePipeline::new(
             ctx,
             &shaders::REFERENCE_TRUTH_COMP,
-            &[DescriptorKind::StorageBuffer; 6],
+            &[DescriptorKind::StorageBuffer; 7],
             std::mem::size_of::<TruthPush>() as u32,
             &[(0, n as u32), (1, settings.nodes)],
             1,
         )?);
         let binds: Vec<Bind> = bufs.iter().map(Bind::Buffer).collect();
         let set = p.allocate_set(ctx, &binds)?;
-        let nrm = normals(scene);
-        let rho = albedo(scene);
-        let finish = Finisher::new(scene, settings.sh_visibility);
-        let rows_per_band = (16384 / w.max(1)).clamp(1, h) as u32;
-        let chunk = azimuth_chunk(w, h, scene.wrap, settings, n);
-        let passes = scene.gi.bounces as u64 + 1;
-        let total = passes * h as u64;
-        let mut done = 0u64;
-        let mut run_pass = |indirect: bool, done: &mut u64| -> Result<Vec<[f64; 3]>> {
-            let mut row = 0u32;
-            while row < h as u32 {
-                let rows = rows_per_band.min(h as u32 - row);
-                ctx.submit_and_wait(|cmd| {
-                    let mut rec = Recorder::new(ctx, cmd, Some(&mut timer));
-                    rec.scope(STAGE_TRUTH, |ctx, cmd| {
-                        barrier::transfer_to_compute(ctx, cmd);
-                        let mut first = 0;
-                        while first < settings.azimuths {
-                            let push = TruthPush {
-                                width: w as u32,
-                                height: h as u32,
-                                wrap: scene.wrap as u32,
-                                azimuths: settings.azimuths,
-                                step: settings.step as f32,
-                                texel_size: scene.texel_size as f32,
-                                sh_visibility: settings.sh_visibility as u32,
-                                indirect: indirect as u32,
-                                row_offset: row,
-                                rows,
-                                azimuth_first: first,
-                                azimuth_count: chunk.min(settings.azimuths - first),
-                            };
-                            let g = [groups(w as u32, 8), groups(rows, 8), 1];
-                            p.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), g);
-                            barrier::compute_to_compute(ctx, cmd);
-                            first += push.azimuth_count;
-                        }
-                    });
-                    Ok(())
-                })?;
-                gpu_ms = match (gpu_ms, timer.timings(ctx)) {
-                    (Some(acc), Ok(t)) => Some(acc + t.iter().map(|(_, ms)| ms).sum::<f64>()),
-                    _ => None,
-                };
-                row += rows;
-                *done += rows as u64;
-                progress(*done, total);
-            }
-            let raw = memory::download_f32(ctx, &bufs[5], 0, (w * h * n2 * 4) as u64)?;
-            Ok((0..w * h)
-                .map(|t| {
-                    let texel: Vec<[f64; 3]> = (0..n2)
-                        .map(|k| {
-                            let o = (t * n2 + k) * 4;
-                            [raw[o] as f64, raw[o + 1] as f64, raw[o + 2] as f64]
-                        })
-                        .collect();
-                    finish.texel(indirect, &texel, nrm[t], rho[t])
-                })
-                .collect())
-        };
-        let direct = run_pass(false, &mut done)?;
-        let mut source = direct.clone();
-        let mut indirect_bounces = Vec::new();
-        for _ in 0..scene.gi.bounces {
-            let src: Vec<[f32; 4]> = source.iter().map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0]).collect();
-            memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&src))?;
-            let b = run_pass(true, &mut done)?;
-            source = b.clone();
-            indirect_bounces.push(b);
-        }
-        Ok(TruthOutput::assemble(w, h, direct, indirect_bounces))
+        let mut run = Passes { ctx, scene, settings, pipe: p, set, bufs: &bufs, timer: &mut timer, gpu_ms: Some(0.0) };
+        let out = run.all(progress)?;
+        Ok((out, run.gpu_ms))
     })();
     if let Some(mut p) = pipe {
         p.destroy(ctx);
     }
     timer.destroy(ctx);
     bufs.into_iter().for_each(|b| b.destroy(ctx));
-    result.map(|o| (o, gpu_ms))
+    result
+}
+
+/// The passes of one reference (direct, then each bounce) on prepared buffers.
+struct Passes<'a> {
+    ctx: &'a Context,
+    scene: &'a Scene,
+    settings: &'a TruthSettings,
+    pipe: &'a ComputePipeline,
+    set: vk::DescriptorSet,
+    bufs: &'a [Buffer],
+    timer: &'a mut StageTimer,
+    gpu_ms: Option<f64>,
+}
+
+impl Passes<'_> {
+    fn all(&mut self, progress: &mut dyn FnMut(u64, u64)) -> Result<TruthOutput> {
+        let (w, h) = (self.scene.field.width(), self.scene.field.height());
+        let total = (self.scene.gi.bounces as u64 + 1) * h as u64;
+        let mut done = 0u64;
+        let direct = self.pass(false, &mut done, total, progress)?;
+        let mut source = direct.clone();
+        let mut indirect_bounces = Vec::new();
+        for _ in 0..self.scene.gi.bounces {
+            let src: Vec<[f32; 4]> = source.iter().map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0]).collect();
+            memory::upload(self.ctx, &self.bufs[2], 0, bytemuck::cast_slice(&src))?;
+            let b = self.pass(true, &mut done, total, progress)?;
+            source = b.clone();
+            indirect_bounces.push(b);
+        }
+        Ok(TruthOutput::assemble(w, h, direct, indirect_bounces))
+    }
+
+    /// One pass (direct or a bounce) over all rows, in bands; returns the finished exit radiance.
+    fn pass(
+        &mut self,
+        indirect: bool,
+        done: &mut u64,
+        total: u64,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<Vec<[f64; 3]>> {
+        let (ctx, scene, settings) = (self.ctx, self.scene, self.settings);
+        let (w, h) = (scene.field.width(), scene.field.height());
+        let n2 = scene.gi.sh_order * scene.gi.sh_order;
+        let rows_per_band = (16384 / w.max(1)).clamp(1, h) as u32;
+        let chunk = azimuth_chunk(w, h, scene.wrap, settings, scene.gi.sh_order);
+        let pushes = pass_pushes(scene, settings, indirect, chunk);
+        let (pipe, set) = (self.pipe, self.set);
+        let mut row = 0u32;
+        while row < h as u32 {
+            let rows = rows_per_band.min(h as u32 - row);
+            ctx.submit_and_wait(|cmd| {
+                let mut rec = Recorder::new(ctx, cmd, Some(&mut *self.timer));
+                rec.scope(STAGE_TRUTH, |ctx, cmd| {
+                    barrier::transfer_to_compute(ctx, cmd);
+                    for push in &pushes {
+                        let push = TruthPush { row_offset: row, rows, ..*push };
+                        let g = [groups(w as u32, 8), groups(rows, 8), 1];
+                        pipe.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), g);
+                        barrier::compute_to_compute(ctx, cmd);
+                    }
+                });
+                Ok(())
+            })?;
+            self.gpu_ms = match (self.gpu_ms, self.timer.timings(ctx)) {
+                (Some(acc), Ok(t)) => Some(acc + t.iter().map(|(_, ms)| ms).sum::<f64>()),
+                _ => None,
+            };
+            row += rows;
+            *done += rows as u64;
+            progress(*done, total);
+        }
+        let raw = memory::download_f32(ctx, &self.bufs[5], 0, (w * h * n2 * 4) as u64)?;
+        let (nrm, rho) = (normals(scene), albedo(scene));
+        let finish = Finisher::new(scene, settings.sh_visibility);
+        Ok((0..w * h)
+            .map(|t| {
+                let texel: Vec<[f64; 3]> = (0..n2)
+                    .map(|k| {
+                        let o = (t * n2 + k) * 4;
+                        [raw[o] as f64, raw[o + 1] as f64, raw[o + 2] as f64]
+                    })
+                    .collect();
+                finish.texel(indirect, &texel, nrm[t], rho[t])
+            })
+            .collect())
+    }
 }

@@ -1,7 +1,10 @@
 //! CPU (f64) twins of the GPU stages, same algorithm and parameters, used by the tests.
 
+pub mod cap;
 pub mod direct;
 pub mod indirect;
 pub mod pyramid;
+pub mod ray;
+pub mod sh_eval;
 pub mod truth;
 pub mod water;

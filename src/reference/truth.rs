@@ -2,16 +2,20 @@
 //! fields (the tests use it to check the GPU version, `src/frame/truth.rs`). docs/accuracy.md
 //! §1 is its specification:
 //!
-//! - per texel, `A ≥ 256` uniformly spaced azimuths; along each, the bilinear surface is
-//!   marched at `1/8`-texel steps (rays that leave the domain escape; with `wrap` the march
-//!   stops after `max(W, H)` texels);
+//! - per texel, `A ≥ 256` uniformly spaced azimuths; along each, the ray is intersected
+//!   exactly with the bilinear patches ([`super::ray`]: a DDA over cells, a quadratic per
+//!   cell; rays that leave the domain escape, with `wrap` they stop after `max(W, H)` texels),
+//!   or, with [`TruthSettings::march`], marched at `step`-texel samples as before;
 //! - visibility: a direction of elevation `ω` is open iff `ω` exceeds the horizon
-//!   `ω_hor = max_t atan((f(p + t·d) − f(p)) / t)`;
-//! - first hits (indirect): the first march sample whose blocking angle reaches `ω`;
-//! - elevation integrals by 16-point Gauss–Legendre on the smooth pieces: the open interval
+//!   `ω_hor = atan(sup_t (f(p + t·d) − f(p)) / (t·s))`;
+//! - first hits (indirect): the smallest `t` where the surface reaches the node's direction;
+//! - elevation integrals by Gauss–Legendre (`nodes`) on the smooth pieces: the open interval
 //!   `[max(ω_hor, ω_t), π/2]` and the blocked interval `[ω_t, ω_hor]`, `ω_t` the exact
 //!   tangent elevation of the receiver's normal along `φ`;
-//! - lighting: the order-n SH of the environment plus each key light's cap SH, as given.
+//! - lighting, exact variant: the order-n SH of the environment as given plus each key light
+//!   as its true cap ([`super::cap`]: its own azimuth samples and, on each, its elevation
+//!   window intersected with the open interval); SH-visibility variant: environment plus the
+//!   caps' SH projections ([`lighting_sh`]).
 //!
 //! Two variants: *exact* (`L_o = ρ/π ∫ L_in max(N·ω, 0) dω`) and *SH-visibility* (exact
 //! visibility and indirect radiance projected to order n, then shaded as the pipeline does:
@@ -22,28 +26,38 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use glam::DVec3;
 
+use super::cap::{cap_azimuths, cap_window};
 use super::direct::normals;
+pub use super::ray::bilinear;
+use super::ray::{first_hits, horizon_slope, march, pieces, Piece, Surface};
+use super::sh_eval::ShBasis;
 use crate::error::{Error, Result};
 use crate::math::quadrature::gauss_legendre;
-use crate::math::{sh, triple, zh};
-use crate::scene::model::{Albedo, Scene};
+use crate::math::{triple, zh};
+use crate::scene::model::{Albedo, KeyLight, Scene};
 
 /// Sampling of the ground truth (defaults: CONVENTIONS.md minimums).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TruthSettings {
     /// Uniformly spaced azimuths, `φ_a = 2π(a + ½)/A`.
     pub azimuths: u32,
-    /// March step in texels.
+    /// March step in texels (used only with `march`).
     pub step: f64,
     /// Gauss–Legendre nodes per elevation interval.
     pub nodes: u32,
     /// SH-visibility reference instead of the exact one.
     pub sh_visibility: bool,
+    /// March the surface at `step` instead of intersecting the bilinear patches exactly (for
+    /// convergence studies; the march's error halves with each halving of the step).
+    pub march: bool,
+    /// Gauss–Legendre nodes of a key light's azimuth range (exact variant, caps holding no
+    /// pole; a cap over a pole uses the `azimuths` uniform ones).
+    pub cap_nodes: u32,
 }
 
 impl Default for TruthSettings {
     fn default() -> Self {
-        Self { azimuths: 256, step: 0.125, nodes: 16, sh_visibility: false }
+        Self { azimuths: 256, step: 0.125, nodes: 16, sh_visibility: false, march: false, cap_nodes: 64 }
     }
 }
 
@@ -57,6 +71,9 @@ impl TruthSettings {
         }
         if !(1..=64).contains(&self.nodes) {
             return Err(Error::param("reference nodes", self.nodes, "an integer in 1..=64"));
+        }
+        if !(1..=1024).contains(&self.cap_nodes) {
+            return Err(Error::param("reference cap nodes", self.cap_nodes, "an integer in 1..=1024"));
         }
         Ok(())
     }
@@ -88,41 +105,75 @@ pub fn lighting_sh(scene: &Scene) -> Vec<[f64; 3]> {
     l
 }
 
-/// Bilinear surface (CONVENTIONS.md) of `data` (`w × h`) at level-0 position `(x, y)`.
-pub fn bilinear(data: &[f64], w: usize, h: usize, x: f64, y: f64, wrap: bool) -> f64 {
-    let (fx, fy) = (x.floor(), y.floor());
-    let (tx, ty) = (x - fx, y - fy);
-    let idx = |i: i64, n: usize| if wrap { i.rem_euclid(n as i64) as usize } else { i.clamp(0, n as i64 - 1) as usize };
-    let (x0, x1, y0, y1) = (idx(fx as i64, w), idx(fx as i64 + 1, w), idx(fy as i64, h), idx(fy as i64 + 1, h));
-    let a = data[y0 * w + x0] * (1.0 - tx) + data[y0 * w + x1] * tx;
-    let b = data[y1 * w + x0] * (1.0 - tx) + data[y1 * w + x1] * tx;
-    a * (1.0 - ty) + b * ty
+/// The environment alone as order-n SH (RGB): the exact reference's SH part; its key lights
+/// are caps ([`key_caps`]).
+pub fn environment_sh(scene: &Scene) -> Vec<[f64; 3]> {
+    let n = scene.gi.sh_order;
+    (0..n * n).map(|k| scene.environment.sh.get(k).copied().unwrap_or([0.0; 3])).collect()
 }
 
-/// One march along azimuth `phi` from texel `(i, j)`: blocking angle and position of every
-/// sample, in order of distance.
-pub fn march(scene: &Scene, heights: &[f64], i: usize, j: usize, phi: f64, step: f64) -> Vec<(f64, [f64; 2])> {
-    let (w, h) = (scene.field.width(), scene.field.height());
-    let (dx, dy) = (phi.cos(), phi.sin());
-    let h0 = heights[j * w + i];
-    let t_max = w.max(h) as f64;
-    let mut out = Vec::new();
-    let mut k = 1u32;
-    loop {
-        let t = k as f64 * step;
-        let q = [i as f64 + t * dx, j as f64 + t * dy];
-        if scene.wrap {
-            if t > t_max {
-                break;
-            }
-        } else if q[0] < 0.0 || q[1] < 0.0 || q[0] > (w - 1) as f64 || q[1] > (h - 1) as f64 {
-            break;
-        }
-        let f = bilinear(heights, w, h, q[0], q[1], scene.wrap);
-        out.push((((f - h0) / (t * scene.texel_size)).atan(), q));
-        k += 1;
+/// The key lights of the exact reference with their azimuth samples `(φ, weight)`
+/// ([`cap_azimuths`]); none for the SH-visibility reference (its lighting holds them as SH).
+pub fn key_caps(scene: &Scene, settings: &TruthSettings) -> Vec<(KeyLight, Vec<(f64, f64)>)> {
+    if settings.sh_visibility {
+        return Vec::new();
     }
-    out
+    scene.key_lights.iter().map(|k| (k.clone(), cap_azimuths(k, settings.azimuths, settings.cap_nodes))).collect()
+}
+
+/// What a receiver sees along one azimuth: the exact ray's pieces, or the march's samples.
+pub enum Profile {
+    Exact { pieces: Vec<Piece>, origin: [f64; 2], d: [f64; 2] },
+    March(Vec<(f64, [f64; 2])>),
+}
+
+impl Profile {
+    /// The ray from vertex `(i, j)` along azimuth `phi`, as `settings` asks.
+    pub fn trace(surf: &Surface, i: usize, j: usize, phi: f64, settings: &TruthSettings) -> Self {
+        let d = [phi.cos(), phi.sin()];
+        if settings.march {
+            Self::March(march(surf, i, j, d, settings.step))
+        } else {
+            Self::Exact { pieces: pieces(surf, i, j, d), origin: [i as f64, j as f64], d }
+        }
+    }
+
+    /// The horizon elevation (`−π/2` where the ray leaves the domain at once); `texel_size` `s`.
+    pub fn horizon(&self, s: f64) -> f64 {
+        let slope = match self {
+            Self::Exact { pieces, .. } => horizon_slope(pieces),
+            Self::March(m) => m.iter().map(|v| v.0).reduce(f64::max),
+        };
+        slope.map_or(-FRAC_PI_2, |k| (k / s).atan())
+    }
+
+    /// First-hit positions of the ascending elevations `omegas`, in order, ending before the
+    /// first one that escapes.
+    pub fn hits(&self, omegas: &[f64], s: f64) -> Vec<[f64; 2]> {
+        let k: Vec<f64> = omegas.iter().map(|om| om.tan() * s).collect();
+        match self {
+            Self::Exact { pieces, origin, d } => {
+                first_hits(pieces, &k).iter().map(|t| [origin[0] + t * d[0], origin[1] + t * d[1]]).collect()
+            }
+            Self::March(m) => {
+                let (mut next, mut running, mut hit) = (0, f64::NEG_INFINITY, [0.0; 2]);
+                let mut out = Vec::with_capacity(k.len());
+                for kk in k {
+                    while running < kk && next < m.len() {
+                        if m[next].0 > running {
+                            (running, hit) = (m[next].0, m[next].1);
+                        }
+                        next += 1;
+                    }
+                    if running < kk {
+                        break;
+                    }
+                    out.push(hit);
+                }
+                out
+            }
+        }
+    }
 }
 
 /// The exact tangent elevation of normal `n` along azimuth `phi`: `N · dir(ω, φ) = 0`.
@@ -189,6 +240,144 @@ fn direction(omega: f64, phi: f64) -> DVec3 {
     DVec3::new(omega.cos() * phi.cos(), omega.cos() * phi.sin(), omega.sin())
 }
 
+/// Gauss–Legendre nodes and weights on `[a, b]`.
+fn nodes_on(gauss: &(Vec<f64>, Vec<f64>), a: f64, b: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
+    gauss.0.iter().zip(&gauss.1).map(move |(x, wt)| (0.5 * (a + b) + 0.5 * (b - a) * x, 0.5 * (b - a) * wt))
+}
+
+/// Everything the per-texel integrals share.
+struct Setup<'a> {
+    scene: &'a Scene,
+    settings: &'a TruthSettings,
+    heights: Vec<f64>,
+    nrm: Vec<[f64; 3]>,
+    /// Environment SH (exact) or environment + key-light SH (SH-visibility).
+    light: Vec<[f64; 3]>,
+    caps: Vec<(KeyLight, Vec<(f64, f64)>)>,
+    gauss: (Vec<f64>, Vec<f64>),
+}
+
+impl Setup<'_> {
+    fn surface(&self) -> Surface<'_> {
+        let (w, h) = (self.scene.field.width(), self.scene.field.height());
+        Surface { heights: &self.heights, width: w, height: h, wrap: self.scene.wrap }
+    }
+
+    fn azimuths(&self) -> impl Iterator<Item = f64> {
+        let a = self.settings.azimuths;
+        (0..a).map(move |k| (k as f64 + 0.5) * 2.0 * PI / a as f64)
+    }
+
+    /// Direct light of texel `(i, j)`: `E` (exact) or `V_k` in `.0` (SH-visibility).
+    fn direct(&self, i: usize, j: usize) -> Vec<[f64; 3]> {
+        let n = self.scene.gi.sh_order;
+        let (surf, s) = (self.surface(), self.scene.texel_size);
+        let p = j * surf.width + i;
+        let nv = DVec3::from_array(self.nrm[p]);
+        let dphi = 2.0 * PI / self.settings.azimuths as f64;
+        let mut e = [0.0; 3];
+        let mut vis = vec![[0.0; 3]; n * n];
+        let mut basis = ShBasis::new(n);
+        for phi in self.azimuths() {
+            let hor = Profile::trace(&surf, i, j, phi, self.settings).horizon(s);
+            if self.settings.sh_visibility {
+                for (om, wt) in nodes_on(&self.gauss, hor, FRAC_PI_2) {
+                    let y = basis.eval(direction(om, phi).to_array());
+                    for (v, yk) in vis.iter_mut().zip(y) {
+                        v[0] += dphi * wt * om.cos() * yk;
+                    }
+                }
+                continue;
+            }
+            let lo = hor.max(tangent_elevation(self.nrm[p], phi));
+            for (om, wt) in nodes_on(&self.gauss, lo, FRAC_PI_2) {
+                let d = direction(om, phi);
+                let y = basis.eval(d.to_array());
+                let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
+                for (ch, ec) in e.iter_mut().enumerate() {
+                    *ec += cosf * self.light.iter().zip(y).map(|(l, yk)| l[ch] * yk).sum::<f64>();
+                }
+            }
+        }
+        if self.settings.sh_visibility {
+            return vis;
+        }
+        for (key, samples) in &self.caps {
+            let c = self.cap(key, samples, i, j);
+            for (ec, r) in e.iter_mut().zip(&key.radiance) {
+                *ec += c * r;
+            }
+        }
+        vec![e]
+    }
+
+    /// `∫_cap∩open max(N·ω, 0) dω` at texel `(i, j)` over the cap's azimuth samples.
+    fn cap(&self, key: &KeyLight, samples: &[(f64, f64)], i: usize, j: usize) -> f64 {
+        let (surf, s) = (self.surface(), self.scene.texel_size);
+        let p = j * surf.width + i;
+        let nv = DVec3::from_array(self.nrm[p]);
+        let l = key.direction.normalize().to_array();
+        let (sin_a, cos_a) = key.angular_radius.sin_cos();
+        let mut sum = 0.0;
+        for &(phi, wphi) in samples {
+            let Some((w0, w1)) = cap_window([phi.cos(), phi.sin()], l, sin_a, cos_a) else { continue };
+            let hor = Profile::trace(&surf, i, j, phi, self.settings).horizon(s);
+            let (lo, hi) = (w0.max(hor).max(tangent_elevation(self.nrm[p], phi)), w1.min(FRAC_PI_2));
+            if hi > lo {
+                for (om, wt) in nodes_on(&self.gauss, lo, hi) {
+                    sum += wphi * wt * om.cos() * nv.dot(direction(om, phi)).max(0.0);
+                }
+            }
+        }
+        sum
+    }
+
+    /// One bounce at texel `(i, j)` from the previous bounce's exit radiance `chans` (per
+    /// channel): `E` (exact) or `U_k` (SH-visibility).
+    fn bounce(&self, chans: &[Vec<f64>], i: usize, j: usize) -> Vec<[f64; 3]> {
+        let n = self.scene.gi.sh_order;
+        let (surf, s) = (self.surface(), self.scene.texel_size);
+        let p = j * surf.width + i;
+        let nv = DVec3::from_array(self.nrm[p]);
+        let dphi = 2.0 * PI / self.settings.azimuths as f64;
+        let mut e = [0.0; 3];
+        let mut u = vec![[0.0; 3]; n * n];
+        let mut basis = ShBasis::new(n);
+        for phi in self.azimuths() {
+            let prof = Profile::trace(&surf, i, j, phi, self.settings);
+            let (hor, lo) = (prof.horizon(s), tangent_elevation(self.nrm[p], phi));
+            if hor <= lo {
+                continue;
+            }
+            let nodes: Vec<(f64, f64)> = nodes_on(&self.gauss, lo, hor).collect();
+            let omegas: Vec<f64> = nodes.iter().map(|v| v.0).collect();
+            for ((om, wt), q) in nodes.iter().zip(prof.hits(&omegas, s)) {
+                let r: Vec<f64> =
+                    chans.iter().map(|c| bilinear(c, surf.width, surf.height, q[0], q[1], surf.wrap)).collect();
+                let d = direction(*om, phi);
+                if self.settings.sh_visibility {
+                    let y = basis.eval(d.to_array());
+                    for (uk, yk) in u.iter_mut().zip(y) {
+                        for ch in 0..3 {
+                            uk[ch] += dphi * wt * om.cos() * yk * r[ch];
+                        }
+                    }
+                } else {
+                    let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
+                    for ch in 0..3 {
+                        e[ch] += cosf * r[ch];
+                    }
+                }
+            }
+        }
+        if self.settings.sh_visibility {
+            u
+        } else {
+            vec![e]
+        }
+    }
+}
+
 /// The ground truth of `scene` (direct + `scene.gi.bounces` diffuse bounces). `progress` is
 /// called with (done, total) work units.
 pub fn render_truth(
@@ -198,116 +387,39 @@ pub fn render_truth(
 ) -> Result<TruthOutput> {
     settings.validate()?;
     scene.gi.validate()?;
-    let n = scene.gi.sh_order;
     let (w, h) = (scene.field.width(), scene.field.height());
-    let heights: Vec<f64> = scene.field.data().iter().map(|&v| v as f64).collect();
-    let nrm = normals(scene);
-    let light = lighting_sh(scene);
-    let (gx, gw) = gauss_legendre(settings.nodes as usize);
-    let a_count = settings.azimuths as usize;
-    let dphi = 2.0 * PI / a_count as f64;
+    let setup = Setup {
+        scene,
+        settings,
+        heights: scene.field.data().iter().map(|&v| v as f64).collect(),
+        nrm: normals(scene),
+        light: if settings.sh_visibility { lighting_sh(scene) } else { environment_sh(scene) },
+        caps: key_caps(scene, settings),
+        gauss: gauss_legendre(settings.nodes as usize),
+    };
     let finish = Finisher::new(scene, settings.sh_visibility);
     let rho = albedo(scene);
-    // GL nodes and weights on [a, b].
-    let nodes = |a: f64, b: f64| -> Vec<(f64, f64)> {
-        gx.iter().zip(&gw).map(|(x, wt)| (0.5 * (a + b) + 0.5 * (b - a) * x, 0.5 * (b - a) * wt)).collect()
-    };
     let total_units = ((scene.gi.bounces as u64 + 1) * (w * h) as u64).max(1);
     let mut done = 0u64;
-
-    // Direct light.
-    let mut direct = Vec::with_capacity(w * h);
-    for j in 0..h {
-        for i in 0..w {
-            let p = j * w + i;
-            let nv = DVec3::from_array(nrm[p]);
-            let mut e = [0.0; 3];
-            let mut vis = vec![0.0; n * n];
-            for a in 0..a_count {
-                let phi = (a as f64 + 0.5) * dphi;
-                let hor = march(scene, &heights, i, j, phi, settings.step).iter().fold(-FRAC_PI_2, |m, s| m.max(s.0));
-                if settings.sh_visibility {
-                    for (om, wt) in nodes(hor, FRAC_PI_2) {
-                        let y = sh::eval(n, direction(om, phi).to_array());
-                        for (v, yk) in vis.iter_mut().zip(&y) {
-                            *v += dphi * wt * om.cos() * yk;
-                        }
-                    }
-                } else {
-                    let lo = hor.max(tangent_elevation(nrm[p], phi));
-                    for (om, wt) in nodes(lo, FRAC_PI_2) {
-                        let d = direction(om, phi);
-                        let y = sh::eval(n, d.to_array());
-                        let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
-                        for ch in 0..3 {
-                            e[ch] += cosf * light.iter().zip(&y).map(|(l, yk)| l[ch] * yk).sum::<f64>();
-                        }
-                    }
-                }
+    let mut pass = |indirect: bool, raw: &dyn Fn(usize, usize) -> Vec<[f64; 3]>| -> Vec<[f64; 3]> {
+        let mut out = Vec::with_capacity(w * h);
+        for j in 0..h {
+            for i in 0..w {
+                let p = j * w + i;
+                out.push(finish.texel(indirect, &raw(i, j), setup.nrm[p], rho[p]));
+                done += 1;
+                progress(done, total_units);
             }
-            let raw: Vec<[f64; 3]> =
-                if settings.sh_visibility { vis.iter().map(|v| [*v, 0.0, 0.0]).collect() } else { vec![e] };
-            direct.push(finish.texel(false, &raw, nrm[p], rho[p]));
-            done += 1;
-            progress(done, total_units);
         }
-    }
-
+        out
+    };
+    let direct = pass(false, &|i, j| setup.direct(i, j));
     // Diffuse bounces: radiance of the previous bounce at the first hit.
     let mut source = direct.clone();
     let mut indirect_bounces = Vec::new();
     for _ in 0..scene.gi.bounces {
         let chans: Vec<Vec<f64>> = (0..3).map(|c| source.iter().map(|v| v[c]).collect()).collect();
-        let mut out = Vec::with_capacity(w * h);
-        for j in 0..h {
-            for i in 0..w {
-                let p = j * w + i;
-                let nv = DVec3::from_array(nrm[p]);
-                let mut e = [0.0; 3];
-                let mut u = vec![[0.0; 3]; n * n];
-                for a in 0..a_count {
-                    let phi = (a as f64 + 0.5) * dphi;
-                    let samples = march(scene, &heights, i, j, phi, settings.step);
-                    let hor = samples.iter().fold(-FRAC_PI_2, |m, s| m.max(s.0));
-                    let lo = tangent_elevation(nrm[p], phi);
-                    if hor <= lo {
-                        continue;
-                    }
-                    // Nodes ascend; the running maximum of the blocking angle sweeps them.
-                    let mut k = 0;
-                    let mut running = -FRAC_PI_2;
-                    for (om, wt) in nodes(lo, hor) {
-                        while running < om && k < samples.len() {
-                            running = running.max(samples[k].0);
-                            k += 1;
-                        }
-                        if running < om {
-                            break;
-                        }
-                        let q = samples[k - 1].1;
-                        let r: Vec<f64> = chans.iter().map(|c| bilinear(c, w, h, q[0], q[1], scene.wrap)).collect();
-                        let d = direction(om, phi);
-                        if settings.sh_visibility {
-                            let y = sh::eval(n, d.to_array());
-                            for (uk, yk) in u.iter_mut().zip(&y) {
-                                for ch in 0..3 {
-                                    uk[ch] += dphi * wt * om.cos() * yk * r[ch];
-                                }
-                            }
-                        } else {
-                            let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
-                            for ch in 0..3 {
-                                e[ch] += cosf * r[ch];
-                            }
-                        }
-                    }
-                }
-                let raw = if settings.sh_visibility { u } else { vec![e] };
-                out.push(finish.texel(true, &raw, nrm[p], rho[p]));
-                done += 1;
-                progress(done, total_units);
-            }
-        }
+        let out = pass(true, &|i, j| setup.bounce(&chans, i, j));
         source = out.clone();
         indirect_bounces.push(out);
     }

@@ -52,8 +52,10 @@ enum Command {
     Animate(AnimateArgs),
     /// Compute the brute-force ground truth of a scene (docs/accuracy.md §1).
     ///
-    /// Ray-marches the full-resolution bilinear surface (no pyramid, no sub-sampling) over
-    /// --azimuths directions at --step texels, integrates elevations with Gauss–Legendre, and
+    /// Intersects rays exactly with the full-resolution bilinear surface (no pyramid, no
+    /// sub-sampling; --march --step S marches it instead) over --azimuths directions, lights it
+    /// with the environment SH and the key lights as true caps, integrates elevations with
+    /// Gauss–Legendre, and
     /// writes the shading texture in the layers `render` writes (direct, indirect = 1..bounces
     /// diffuse bounces, glossy = 0, total). The exact reference by default; --sh-visibility
     /// projects the exact visibility and indirect radiance to order-n SH first. On the GPU

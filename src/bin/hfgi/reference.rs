@@ -29,12 +29,19 @@ pub struct ReferenceArgs {
     /// Uniformly spaced azimuths (CONVENTIONS.md: at least 256).
     #[arg(long, default_value_t = 256)]
     azimuths: u32,
-    /// March step in texels (CONVENTIONS.md: at most 1/8).
-    #[arg(long, default_value_t = 0.125)]
+    /// March the surface at --step instead of intersecting the bilinear patches exactly (the
+    /// march's error halves with each halving of the step; docs/accuracy.md §1).
+    #[arg(long)]
+    march: bool,
+    /// March step in texels, with --march.
+    #[arg(long, default_value_t = 0.125, requires = "march")]
     step: f64,
     /// Gauss–Legendre nodes per elevation interval (CONVENTIONS.md: at least 16).
     #[arg(long, default_value_t = 16)]
     nodes: u32,
+    /// Gauss–Legendre nodes over a key light's azimuth range (exact reference).
+    #[arg(long, default_value_t = 64)]
+    cap_nodes: u32,
     /// Run the f64 CPU version instead of the GPU one (fields up to 64²; for checking).
     #[arg(long)]
     cpu: bool,
@@ -56,7 +63,14 @@ fn progress_bar(what: &str) -> indicatif::ProgressBar {
 
 pub fn reference(a: ReferenceArgs) -> Result<()> {
     let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
-    let settings = TruthSettings { azimuths: a.azimuths, step: a.step, nodes: a.nodes, sh_visibility: a.sh_visibility };
+    let settings = TruthSettings {
+        azimuths: a.azimuths,
+        step: a.step,
+        nodes: a.nodes,
+        sh_visibility: a.sh_visibility,
+        march: a.march,
+        cap_nodes: a.cap_nodes,
+    };
     settings.validate().context("reference settings")?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let kind = if a.sh_visibility { "SH-visibility" } else { "exact" };
@@ -74,13 +88,13 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
         render_truth(&scene, &settings, &mut on_progress)?
     } else {
         let ctx = context(&a.device)?;
+        let rays = if a.march { format!("march at {} texel", a.step) } else { "exact intersection".to_string() };
         eprintln!(
-            "{kind} reference on {} ({}), field {w}×{h}, {} bounces, {} azimuths, step {} texel, {} nodes",
+            "{kind} reference on {} ({}), field {w}×{h}, {} bounces, {} azimuths, {rays}, {} nodes",
             ctx.info().name,
             ctx.info().driver,
             scene.gi.bounces,
             a.azimuths,
-            a.step,
             a.nodes
         );
         let r = hfgi::frame::truth::render_truth_gpu(&ctx, &scene, &settings, &mut on_progress);
