@@ -279,6 +279,9 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
         "frame 2 (heights unchanged): 1 stage",
         "1. shade.direct             amortised: even static frame shades the direct light",
         "not recorded: heights unchanged since the last frame",
+        "resolved knobs: quality=default sh_order=4 azimuths=32 level_step=4",
+        "level0=bilinear horizon=samples",
+        "elevation_basis=legendre",
     ] {
         assert!(text.contains(want), "`hfgi plan` output lacks {want:?}");
     }

@@ -259,10 +259,9 @@ fn values_are_read() {
             interpolation: Interpolation::Bspline,
             pyramid: PyramidMode::Pyramid,
             bounces: 0,
-            radiance_level_step: 4,
-            radiance_level_offset: 2,
             amortize: true,
             glossy_pyramid: hfgi::scene::model::GlossyPyramid::Scalar,
+            ..GiSettings::default()
         }
     );
     assert_eq!(s.camera.position.to_array(), [1.0, 2.0, 3.0]);
@@ -280,6 +279,36 @@ fn height_scale_and_texel_size_scale_generated_heights() {
     // Camera defaults follow the field's world size.
     let (lo, hi) = s.field.range();
     assert_eq!(s.camera, Camera::default_for(32, 32, 1.5, lo as f64, hi as f64));
+}
+
+#[test]
+fn quality_presets_resolve_every_knob_and_explicit_knobs_override_them() {
+    use hfgi::scene::model::{ElevationBasis, Horizon, Level0, OmegaMin, Quality, ScanReach};
+    let d = parse("").unwrap().gi;
+    assert_eq!(d, GiSettings::preset(Quality::Default));
+    assert_eq!((d.level0, d.horizon, d.omega_min), (Level0::Bilinear, Horizon::Samples, OmegaMin::Tangent));
+    let p = parse("[gi]\nquality = \"paper\"\n").unwrap().gi;
+    assert_eq!((p.azimuths, p.level_step, p.level_offset, p.near_steps), (32, 4, 2, 0));
+    assert_eq!((p.level0, p.horizon, p.scan_reach), (Level0::Bspline, Horizon::Bspline, ScanReach::Side));
+    assert_eq!((p.omega_min, p.elevation_basis), (OmegaMin::Asin, ElevationBasis::Nlp));
+    let h = parse("[gi]\nquality = \"high\"\nazimuths = 24\n").unwrap().gi;
+    assert_eq!(h.quality, Quality::High);
+    assert_eq!(h.azimuths, 24, "an explicit knob overrides the preset");
+    assert_eq!(GiSettings { azimuths: 64, ..h.clone() }, GiSettings::preset(Quality::High));
+    let u = parse_with("", &["gi.quality=ultra", "gi.level0=bspline"]).unwrap().gi;
+    assert_eq!((u.quality, u.level0, u.sh_order), (Quality::Ultra, Level0::Bspline, 6));
+    // The ladder is monotone in every sampling knob.
+    let ladder: Vec<GiSettings> =
+        [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra].map(GiSettings::preset).to_vec();
+    for w in ladder.windows(2) {
+        let (a, b) = (&w[0], &w[1]);
+        assert!(b.azimuths > a.azimuths && b.level_step >= a.level_step && b.level_offset >= a.level_offset);
+        assert!(b.near_steps > a.near_steps && b.subsample <= a.subsample && b.sh_order >= a.sh_order);
+    }
+    let err = parse("[gi]\nquality = \"best\"\n").unwrap_err().to_string();
+    assert!(err.contains("gi.quality") && err.contains("ultra"), "{err}");
+    let err = parse("[gi]\nnear_steps = 65\n").unwrap_err().to_string();
+    assert!(err.contains("gi.near_steps") && err.contains("0..=64"), "{err}");
 }
 
 // ---------------------------------------------------------------------------------------------

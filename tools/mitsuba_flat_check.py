@@ -88,6 +88,7 @@ def main():
                     "--spp", str(args.spp)], check=True)
 
     sys.path.insert(0, here)
+    sys.dont_write_bytecode = True  # no __pycache__ in tools/
     from mitsuba_check import sh_eval_rgb  # noqa: E402
 
     order = int(round(math.sqrt(len(env))))

@@ -252,9 +252,10 @@ impl GiSettings {
     pub fn preset(q: Quality) -> Self {
         // (n, m, k, o, sub-sampling, k_u, o_u, near steps)
         let (n, m, k, o, sub, ku, ou, near) = match q {
-            Quality::Draft => (4, 16, 2, 2, 2, 2, 2, 2),
-            Quality::Default | Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 4),
-            Quality::High => (6, 64, 8, 4, 1, 8, 4, 16),
+            Quality::Draft => (4, 16, 2, 4, 2, 2, 2, 2),
+            Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4),
+            Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0),
+            Quality::High => (6, 64, 8, 8, 1, 8, 6, 16),
             Quality::Ultra => (6, 128, 16, 8, 1, 16, 8, 48),
         };
         let paper = q == Quality::Paper;
