@@ -367,24 +367,15 @@ fn key_light_energy_product_vs_window() {
 /// (m = 128, k = 16, order 6: the longest per-invocation loops on lavapipe).
 #[test]
 fn gpu_matches_cpu_for_every_fix_and_preset() {
-    use hfgi::scene::model::{ElevationBasis, Horizon, Level0, OmegaMin, Quality, ScanReach};
+    use hfgi::scene::model::Quality;
     let ctx = gpu();
     let mut base = scene(rough_field(40, 28, 13));
     base.environment = sky(4);
     base.key_lights = vec![key_light(25.0, 200.0, 3.0, 20.0), key_light(60.0, 40.0, 8.0, 2.0)];
     let paper = base.gi.with_quality(Quality::Paper);
-    let fixes: [(&str, &dyn Fn(&mut hfgi::scene::model::GiSettings)); 6] = [
-        ("level0=bilinear", &|g| g.level0 = Level0::Bilinear),
-        ("horizon=samples", &|g| g.horizon = Horizon::Samples),
-        ("near_steps=8", &|g| g.near_steps = 8),
-        ("scan_reach=diagonal", &|g| g.scan_reach = ScanReach::Diagonal),
-        ("omega_min=tangent", &|g| g.omega_min = OmegaMin::Tangent),
-        ("elevation_basis=legendre", &|g| g.elevation_basis = ElevationBasis::Legendre),
-    ];
-    for (name, f) in fixes {
+    for (name, gi) in common::scenes::single_fixes(&paper, 8) {
         let mut s = base.clone();
-        s.gi = paper.clone();
-        f(&mut s.gi);
+        s.gi = gi;
         compare(&ctx, &s, &format!("paper + {name}"));
     }
     for q in [Quality::Draft, Quality::Default, Quality::High] {

@@ -281,23 +281,14 @@ fn scalar_and_vector_glossy_pyramids_figure_5() {
 /// GPU against the CPU twin (one bounce; vector glossy pyramid for one of them).
 #[test]
 fn gpu_matches_cpu_for_every_fix_and_preset() {
-    use hfgi::scene::model::{ElevationBasis, Horizon, Level0, OmegaMin, Quality, ScanReach};
+    use hfgi::scene::model::Quality;
     let ctx = gpu();
     let mut base = bright(rough_field(24, 18, 9));
     base.gi.bounces = 1;
     let paper = base.gi.with_quality(Quality::Paper);
-    let fixes: [(&str, &dyn Fn(&mut hfgi::scene::model::GiSettings)); 6] = [
-        ("level0=bilinear", &|g| g.level0 = Level0::Bilinear),
-        ("horizon=samples", &|g| g.horizon = Horizon::Samples),
-        ("near_steps=6", &|g| g.near_steps = 6),
-        ("scan_reach=diagonal", &|g| g.scan_reach = ScanReach::Diagonal),
-        ("omega_min=tangent", &|g| g.omega_min = OmegaMin::Tangent),
-        ("elevation_basis=legendre", &|g| g.elevation_basis = ElevationBasis::Legendre),
-    ];
-    for (name, f) in fixes {
+    for (name, gi) in common::scenes::single_fixes(&paper, 6) {
         let mut s = base.clone();
-        s.gi = paper.clone();
-        f(&mut s.gi);
+        s.gi = gi;
         compare(&ctx, &s, &format!("paper + {name}"));
     }
     for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {

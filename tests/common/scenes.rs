@@ -63,3 +63,24 @@ pub fn rel_l2(x: &[[f32; 3]], r: &[[f64; 3]]) -> f64 {
         (num / den).sqrt()
     }
 }
+
+/// Each accuracy fix of docs/accuracy.md §4 alone on `paper` (the paper's settings), labelled.
+pub fn single_fixes(
+    paper: &hfgi::scene::model::GiSettings,
+    near: u32,
+) -> Vec<(String, hfgi::scene::model::GiSettings)> {
+    use hfgi::scene::model::{ElevationBasis, Horizon, Level0, OmegaMin, ScanReach};
+    let with = |f: &dyn Fn(&mut hfgi::scene::model::GiSettings)| {
+        let mut g = paper.clone();
+        f(&mut g);
+        g
+    };
+    vec![
+        ("level0=bilinear".into(), with(&|g| g.level0 = Level0::Bilinear)),
+        ("horizon=samples".into(), with(&|g| g.horizon = Horizon::Samples)),
+        (format!("near_steps={near}"), with(&|g| g.near_steps = near)),
+        ("scan_reach=diagonal".into(), with(&|g| g.scan_reach = ScanReach::Diagonal)),
+        ("omega_min=tangent".into(), with(&|g| g.omega_min = OmegaMin::Tangent)),
+        ("elevation_basis=legendre".into(), with(&|g| g.elevation_basis = ElevationBasis::Legendre)),
+    ]
+}
