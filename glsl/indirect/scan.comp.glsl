@@ -115,6 +115,16 @@ void main() {
         float running = tangent ? atan(-dot(N.xy, d), N.z) : -asin(clamp(dot(N.xy, d), -1.0, 1.0));
         vec3 u[HFGI_NE];
         for (int l = 0; l < HFGI_NE; ++l) u[l] = vec3(0.0);
+        // The near-field limit t → 0 (with near steps): the receiver's own surface, seen with the
+        // receiver's radiance (radiance level 0 at p), over [ω_min, ω_0).
+        float limit;
+        if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running) {
+            float seg[HFGI_NE];
+            hfgi_elevation(running, limit, seg);
+            vec3 rad = member_radiance(0u, scan.p, limit, d, scan.work, pc.radiance_stack != 0u, wrap, scan.raw0);
+            for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
+            running = limit;
+        }
         for (int i = scan.first; i < scan.end; ++i) {
             vec2 q;
             float omega;

@@ -35,6 +35,8 @@ float hfgi_base[HFGI_NV];
 float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
     float wmax = -1.5707963267948966;
     int count = 0;
+    float limit;
+    if (scan.first < 0 && hfgi_scan_limit(scan, d, limit)) wmax = limit;
     for (int i = scan.first; i < scan.end; ++i) {
         vec2 q;
         float omega;

@@ -18,7 +18,7 @@ use super::pyramid::HeightPyramid;
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
 use super::shade::ShadePass;
-use super::shared::{azimuth_chunks, IndirectPush, ShadePush, FLAG_ACCUMULATE, INDIRECT_SAMPLE_BUDGET};
+use super::shared::{azimuth_chunks, IndirectPush, ShadePush, FLAG_ACCUMULATE, INDIRECT_LOOP_BUDGET};
 use crate::error::Result;
 use crate::math::{azimuth, elevation};
 use crate::reference::direct::scan_steps;
@@ -211,7 +211,11 @@ impl IndirectPass {
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
-            chunks: azimuth_chunks(push.sample_count, ladder, INDIRECT_SAMPLE_BUDGET),
+            chunks: azimuth_chunks(
+                push.sample_count,
+                ladder * elevation::size(gi.elevation_basis, n) as u32,
+                INDIRECT_LOOP_BUDGET,
+            ),
             push,
             shade_push: shade.push(),
         })

@@ -38,19 +38,21 @@ pub const FLAG_TANGENT: u32 = 4;
 /// `HFGI_FLAG_ACCUMULATE`: add to the output instead of overwriting it (azimuth chunks).
 pub const FLAG_ACCUMULATE: u32 = 8;
 
-/// Scan samples (azimuths × ladder length) one invocation of the visibility pass may run per
-/// dispatch. lavapipe silently ends an invocation's loops after 65535 iterations in total
-/// (docs/accuracy.md §1); 48² at `ultra` (128 azimuths × 146 samples = 18.7k) was measured
-/// intact.
-pub const VISIBILITY_SAMPLE_BUDGET: u32 = 8192;
-/// The same for the indirect scan, whose casting-set members cost more: 64 azimuths × 57 samples
-/// (3.6k) was measured intact, 128 × 130 (16.6k) lost most of its light.
-pub const INDIRECT_SAMPLE_BUDGET: u32 = 2048;
+/// Loop iterations one invocation of the visibility pass may run per dispatch, counted as
+/// `ladder + n²·e` per azimuth (the scan, then the fold `A_j v_j`; `e` values per azimuth).
+/// lavapipe silently ends an invocation's loops after 65535 iterations in total
+/// (docs/accuracy.md §1).
+pub const VISIBILITY_LOOP_BUDGET: u32 = 40_000;
+/// The same for the indirect scan, counted as `ladder · e` per azimuth (every casting-set member
+/// adds an `e`-vector): 16 azimuths × 130 samples × 21 (44k) was measured intact, 128 × 130 × 21
+/// lost most of the indirect light.
+pub const INDIRECT_LOOP_BUDGET: u32 = 40_000;
 
-/// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / ladder`
-/// samples each (at least one), one dispatch per chunk, the later ones accumulating.
-pub fn azimuth_chunks(count: u32, ladder: u32, budget: u32) -> Vec<(u32, u32)> {
-    let per = (budget / ladder.max(1)).max(1);
+/// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / cost`
+/// samples each (at least one; `cost` loop iterations per azimuth), one dispatch each, the later
+/// ones accumulating.
+pub fn azimuth_chunks(count: u32, cost: u32, budget: u32) -> Vec<(u32, u32)> {
+    let per = (budget / cost.max(1)).max(1);
     (0..count.div_ceil(per)).map(|c| (c * per, per.min(count - c * per))).collect()
 }
 

@@ -10,7 +10,7 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
-use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, VISIBILITY_SAMPLE_BUDGET};
+use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, VISIBILITY_LOOP_BUDGET};
 use crate::error::Result;
 use crate::math::azimuth::{self, AzimuthSet};
 use crate::math::elevation;
@@ -65,8 +65,8 @@ pub struct VisibilityPass {
     sets: Vec<SetRange>,
     n: usize,
     push: VisibilityPush,
-    /// Scan samples per azimuth (the ladder's length), for the azimuth chunks.
-    ladder: u32,
+    /// Loop iterations per azimuth (ladder + n²·e), for the azimuth chunks.
+    loop_cost: u32,
 }
 
 impl VisibilityPass {
@@ -187,7 +187,8 @@ impl VisibilityPass {
             sets,
             n,
             push,
-            ladder: crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len() as u32,
+            loop_cost: (crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
+                + n2 * elevation::size(scene.gi.elevation_basis, n)) as u32,
         })
     }
 
@@ -213,7 +214,7 @@ impl VisibilityPass {
             for (i, s) in &chosen {
                 // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into V.
                 for (c, (first, count)) in
-                    azimuth_chunks(s.count, self.ladder, VISIBILITY_SAMPLE_BUDGET).iter().enumerate()
+                    azimuth_chunks(s.count, self.loop_cost, VISIBILITY_LOOP_BUDGET).iter().enumerate()
                 {
                     if c > 0 {
                         barrier::compute_to_compute(ctx, cmd);

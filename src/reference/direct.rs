@@ -82,12 +82,30 @@ impl<'a> Scan<'a> {
         }
     }
 
+    /// The near-field limit `t → 0` of the blocking angle (only with near steps; `None` where the
+    /// ray leaves the domain at once): the slope of the bilinear level-0 surface at `p` along
+    /// `phi` in the cell the ray enters, as the reference's first piece starts.
+    pub fn limit(&self, p: [f64; 2], phi: f64) -> Option<f64> {
+        if self.near == 0 {
+            return None;
+        }
+        let l0 = self.pyr.layout.levels[0];
+        let (dx, dy) = (phi.cos(), phi.sin());
+        let e = [p[0] + 1e-3 * dx, p[1] + 1e-3 * dy];
+        let (w, h) = (l0.width as f64, l0.height as f64);
+        if !self.wrap && (e[0] < 0.0 || e[1] < 0.0 || e[0] > w - 1.0 || e[1] > h - 1.0) {
+            return None;
+        }
+        let (gx, gy) = self.pyr.gradient_in_cell(p[0], p[1], e[0].floor() as i64, e[1].floor() as i64);
+        Some(((gx * dx + gy * dy) / self.texel_size).atan())
+    }
+
     /// `ω_max` at level-0 position `p` along azimuth `phi`: the largest blocking angle, or
     /// eq. 17's spline maximum through the ladder's `n_v` samples (and the largest extra one).
     pub fn omega_max(&self, p: [f64; 2], phi: f64) -> f64 {
         let n_v = self.pyr.layout.count();
         let mut ladder = Vec::new();
-        let mut extra = -FRAC_PI_2;
+        let mut extra = self.limit(p, phi).unwrap_or(-FRAC_PI_2);
         for (idx, _, omega) in self.samples(p, phi) {
             let i = idx as i64 - self.near as i64;
             if self.horizon_samples || i < 0 || i >= n_v as i64 {

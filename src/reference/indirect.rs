@@ -82,6 +82,17 @@ pub fn scan_radiance(
     let e = elevation::size(scan.basis, n);
     let mut u = [vec![0.0; e], vec![0.0; e], vec![0.0; e]];
     let mut running = omega_min;
+    // The near-field limit t → 0: the receiver's own surface with its own radiance (level 0).
+    if let Some(limit) = scan.limit(p, phi).filter(|l| *l > running) {
+        let seg = elevation::interval(scan.basis, n, running, limit);
+        let rad = radiance(usize::MAX, p, limit);
+        for (c, uc) in u.iter_mut().enumerate() {
+            for (a, b) in uc.iter_mut().zip(&seg) {
+                *a += rad[c] * b;
+            }
+        }
+        running = limit;
+    }
     for (i, q, omega) in scan.samples(p, phi) {
         if omega > running {
             // Casting-set member (eq. 6): it is seen over [running, ω); eq. 12 telescoped.
@@ -130,7 +141,7 @@ fn member_radiance(
     omega: f64,
     phi: f64,
 ) -> [f64; 3] {
-    let level = src.levels[i];
+    let level = src.levels.get(i).copied().unwrap_or(0); // usize::MAX: the t → 0 limit, level 0
     let mut rad = [0, 1, 2].map(|c| src.at(c, level, q));
     if src.channels.len() > 3 {
         let n = scene.gi.sh_order;

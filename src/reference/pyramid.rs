@@ -157,6 +157,18 @@ impl CpuPyramid {
         self.stack.as_ref().map(|s| bilinear(&s[i], ww, wh, xw, yw, self.wrap))
     }
 
+    /// Gradient `(∂f/∂x, ∂f/∂y)` (per texel) of the bilinear level-0 surface at `(x, y)` in the
+    /// cell whose lower corner is `(cx, cy)` (the twin of `hfgi_scan_limit`).
+    pub fn gradient_in_cell(&self, x: f64, y: f64, cx: i64, cy: i64) -> (f64, f64) {
+        let l0 = self.layout.levels[0];
+        let (w, h) = (l0.width as usize, l0.height as usize);
+        let t = |dx: i64, dy: i64| texel(&self.levels[0], w, h, cx + dx, cy + dy, self.wrap);
+        let (fx, fy) = (x - cx as f64, y - cy as f64);
+        let gx = (t(1, 0) - t(0, 0)) * (1.0 - fy) + (t(1, 1) - t(0, 1)) * fy;
+        let gy = (t(0, 1) - t(0, 0)) * (1.0 - fx) + (t(1, 1) - t(1, 0)) * fx;
+        (gx, gy)
+    }
+
     /// Level `i` unfiltered: bilinear on its texels at `(x, y)` in level-0 texel units
     /// (`gi.level0 = "bilinear"` reads level 0 this way).
     pub fn sample_raw(&self, i: usize, x: f64, y: f64) -> f64 {

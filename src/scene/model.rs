@@ -201,7 +201,7 @@ pub struct GiSettings {
     pub azimuths: u32,
     /// Azimuthal samples per key light, 2..=64.
     pub key_light_azimuths: u32,
-    /// Pyramid level step k_v, 1..=16.
+    /// Pyramid level step k_v, 1..=32.
     pub level_step: u32,
     /// Level offset o_v, 0..=8.
     pub level_offset: u32,
@@ -256,7 +256,7 @@ impl GiSettings {
             Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4),
             Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0),
             Quality::High => (6, 64, 8, 8, 1, 8, 6, 16),
-            Quality::Ultra => (6, 128, 16, 8, 1, 16, 8, 48),
+            Quality::Ultra => (6, 128, 24, 8, 1, 16, 8, 64),
         };
         let paper = q == Quality::Paper;
         Self {
@@ -440,7 +440,7 @@ impl GiSettings {
         check("gi.sh_order", u32::try_from(self.sh_order).unwrap_or(u32::MAX), 2, 8)?;
         check("gi.azimuths", self.azimuths, 4, 256)?;
         check("gi.key_light_azimuths", self.key_light_azimuths, 2, 64)?;
-        check("gi.level_step", self.level_step, 1, 16)?;
+        check("gi.level_step", self.level_step, 1, 32)?;
         check("gi.level_offset", self.level_offset, 0, 8)?;
         if ![1, 2, 4].contains(&self.subsample) {
             return Err(Error::param("gi.subsample", self.subsample, "1, 2 or 4"));
