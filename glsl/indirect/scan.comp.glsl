@@ -116,9 +116,11 @@ void main() {
         vec3 u[HFGI_NE];
         for (int l = 0; l < HFGI_NE; ++l) u[l] = vec3(0.0);
         // The near-field limit t → 0 (with near steps): the receiver's own surface, seen with the
-        // receiver's radiance (radiance level 0 at p), over [ω_min, ω_0).
+        // receiver's radiance (radiance level 0 at p), over [ω_min, ω_0). Skipped when narrower than
+        // 1e-5 rad: at the tangent plane its cosine-weighted share is O(width²), and
+        // on a plane the two angles differ only by rounding (f32 here, f64 in the twin).
         float limit;
-        if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running) {
+        if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running + 1e-5) {
             float seg[HFGI_NE];
             hfgi_elevation(running, limit, seg);
             vec3 rad = member_radiance(0u, scan.p, limit, d, scan.work, pc.radiance_stack != 0u, wrap, scan.raw0);

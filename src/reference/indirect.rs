@@ -83,7 +83,9 @@ pub fn scan_radiance(
     let mut u = [vec![0.0; e], vec![0.0; e], vec![0.0; e]];
     let mut running = omega_min;
     // The near-field limit t → 0: the receiver's own surface with its own radiance (level 0).
-    if let Some(limit) = scan.limit(p, phi).filter(|l| *l > running) {
+    // Skipped when narrower than 1e-5 rad (as on the GPU): at the tangent plane its cosine-weighted
+    // share is O(width²), and on a plane the two angles differ only by rounding.
+    if let Some(limit) = scan.limit(p, phi).filter(|l| *l > running + 1e-5) {
         let seg = elevation::interval(scan.basis, n, running, limit);
         let rad = radiance(usize::MAX, p, limit);
         for (c, uc) in u.iter_mut().enumerate() {
