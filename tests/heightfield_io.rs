@@ -93,7 +93,7 @@ fn bits(f: &HeightField) -> Vec<u32> {
 
 #[test]
 fn generator_names_defaults_and_display_round_trip() {
-    assert_eq!(names(), &["fbm", "sines", "cones", "cliff", "craters", "city"]);
+    assert_eq!(names(), &["fbm", "sines", "cones", "cliff", "craters", "city", "terraces", "spikes"]);
     for name in names() {
         let g: Generator = name.parse().unwrap();
         assert_eq!(g, Generator::default_for(name).unwrap());
@@ -176,13 +176,15 @@ fn generators_match_golden_checksums() {
     assert_eq!(got, want);
 }
 
-const GOLDEN: [(&str, u64); 6] = [
+const GOLDEN: [(&str, u64); 8] = [
     ("fbm", 15006484521439985629),
     ("sines", 6532275230212800631),
     ("cones", 6142997224739252925),
     ("cliff", 1960994348892847669),
     ("craters", 125357845671508425),
     ("city", 14778149378463391892),
+    ("terraces", 8295839374892931381),
+    ("spikes", 4242860902646804452),
 ];
 
 #[test]

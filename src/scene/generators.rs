@@ -311,7 +311,9 @@ impl Generator {
                 });
                 for (cx, cy, u) in feature_centres(seed, count, width, height) {
                     let (i, j) = (cx.round() as usize, cy.round() as usize);
-                    data[j * width + i] += ((0.5 + 0.5 * u) * tall * w) as f32;
+                    // Spikes on the same texel do not stack: the tallest one stands.
+                    let v = &mut data[j * width + i];
+                    *v = v.max(((0.5 + 0.5 * u) * tall * w) as f32);
                 }
             }
             Generator::City { seed, blocks, street, height: tall, density } => {
