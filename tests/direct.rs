@@ -5,28 +5,15 @@
 mod common;
 
 use common::scenes::{key_light, rel_l2, scene, sky, uniform};
-use common::{gpu, rough_field};
+use common::{gpu, render_layers, rough_field};
 use hfgi::frame::Renderer;
 use hfgi::reference::direct::render_direct;
 use hfgi::scene::model::{Albedo, Interpolation, PyramidMode, Scene};
 use hfgi::scene::HeightField;
 use hfgi::vk::{Context, Recorder};
 
-fn render_gpu(ctx: &Context, scene: &Scene) -> hfgi::frame::ShadingLayers {
-    let mut r = Renderer::new(ctx, scene).unwrap();
-    ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(ctx, cmd, None);
-        r.record(&mut rec);
-        Ok(())
-    })
-    .unwrap();
-    let layers = r.read_layers(ctx).unwrap();
-    r.destroy(ctx);
-    layers
-}
-
 fn compare(ctx: &Context, s: &Scene, what: &str) -> f64 {
-    let g = render_gpu(ctx, s);
+    let g = render_layers(ctx, s);
     let c = render_direct(s).unwrap();
     let e_direct = rel_l2(&g.direct, &c.direct);
     let e_total = rel_l2(&g.total, &c.total);
@@ -119,7 +106,7 @@ fn flat_field_visibility_is_the_upper_hemisphere() {
         // Constant radiance L: diffuse shading = ρ·L.
         let l = 1.7;
         s.environment = uniform(l);
-        let g = render_gpu(&ctx, &s);
+        let g = render_layers(&ctx, &s);
         let rho = [0.7, 0.6, 0.5];
         let err = g
             .direct
@@ -142,7 +129,7 @@ fn flat_field_general_environment_documents_the_truncation() {
     s.key_lights.clear();
     s.environment = sky(8);
     let n = s.gi.sh_order;
-    let g = render_gpu(&ctx, &s);
+    let g = render_layers(&ctx, &s);
     let c = render_direct(&s).unwrap();
     let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
     let rho = [0.7, 0.6, 0.5];
@@ -187,8 +174,8 @@ fn rotating_the_field_rotates_the_shading() {
     for l in &mut b.key_lights {
         l.direction = glam::DVec3::new(-l.direction.y, l.direction.x, l.direction.z);
     }
-    let ga = render_gpu(&ctx, &a);
-    let gb = render_gpu(&ctx, &b);
+    let ga = render_layers(&ctx, &a);
+    let gb = render_layers(&ctx, &b);
     let w = 48;
     let mut worst = 0.0f64;
     let scale = ga.direct.iter().flat_map(|p| p.iter()).fold(0.0f32, |m, v| m.max(v.abs())) as f64;
@@ -233,7 +220,7 @@ fn mirror_symmetric_field_gives_mirror_symmetric_shading() {
         .collect();
     s.environment.sh = zonal;
     s.key_lights = vec![key_light(40.0, 90.0, 6.0, 3.0)];
-    let g = render_gpu(&ctx, &s);
+    let g = render_layers(&ctx, &s);
     let scale = g.direct.iter().flat_map(|p| p.iter()).fold(0.0f32, |m, v| m.max(v.abs())) as f64;
     let mut worst = 0.0f64;
     for j in 0..h {
@@ -291,10 +278,10 @@ fn key_light_shadow_is_sharper_than_folded() {
     let profile = |g: &hfgi::frame::ShadingLayers| -> Vec<f64> {
         (0..w).map(|x| g.direct[(rows / 2) * w + x][0] as f64).collect()
     };
-    let key = profile(&render_gpu(&ctx, &s));
+    let key = profile(&render_layers(&ctx, &s));
     s.key_lights.clear();
     s.environment = folded(&light, s.gi.sh_order);
-    let fold = profile(&render_gpu(&ctx, &s));
+    let fold = profile(&render_layers(&ctx, &s));
     let (wk, wf) = (rise_width(&key, x0 + 1), rise_width(&fold, x0 + 1));
     eprintln!("shadow edge 10–90% width along the step: key light {wk:.2} texels, folded into SH (n=4) {wf:.2} texels");
     eprintln!("lit level: key {:.4}, folded {:.4}", key[w - 1], fold[w - 1]);
@@ -315,7 +302,7 @@ fn level_offset_sharpens_long_shadows() {
     let mut ends = Vec::new();
     for o in 0..=4 {
         s.gi.level_offset = o;
-        let g = render_gpu(&ctx, &s);
+        let g = render_layers(&ctx, &s);
         let p: Vec<f64> = (0..w).map(|x| g.direct[(rows / 2) * w + x][0] as f64).collect();
         let half = 0.5 * p[w - 1];
         let i = (x0..w - 1).find(|&i| p[i] < half && p[i + 1] >= half).unwrap();
@@ -364,7 +351,7 @@ fn key_light_energy_product_vs_window() {
 
 /// Every accuracy fix of docs/accuracy.md §4 alone on the paper's settings, and every preset,
 /// GPU against the CPU twin, with the environment and two key lights; `ultra` on a 48² field
-/// (m = 128, k = 16, order 6: the longest per-invocation loops on lavapipe).
+/// (m = 128, k = 24, order 8: the longest per-invocation loops on lavapipe).
 #[test]
 fn gpu_matches_cpu_for_every_fix_and_preset() {
     use hfgi::scene::model::Quality;
@@ -387,4 +374,18 @@ fn gpu_matches_cpu_for_every_fix_and_preset() {
     s.environment = sky(4);
     s.gi = s.gi.with_quality(Quality::Ultra);
     compare(&ctx, &s, "quality=ultra, 48²");
+}
+
+#[test]
+fn gpu_matches_cpu_at_the_highest_sh_order() {
+    // sh_order accepts 2..=8; 3/4/6 are covered above, the top of the range here.
+    let ctx = gpu();
+    let mut s = scene(rough_field(24, 20, 5));
+    s.environment = sky(4);
+    s.key_lights = vec![key_light(30.0, 120.0, 5.0, 10.0)];
+    for q in [hfgi::scene::model::Quality::Paper, hfgi::scene::model::Quality::Ultra] {
+        s.gi = s.gi.with_quality(q);
+        s.gi.sh_order = 8;
+        compare(&ctx, &s, &format!("n=8 quality={q}"));
+    }
 }

@@ -304,3 +304,15 @@ fn gpu_matches_cpu_for_every_fix_and_preset() {
     s.gi.pyramid = PyramidMode::Pyramid;
     compare(&ctx, &s, "quality=default, vector glossy pyramid, true pyramid");
 }
+
+#[test]
+fn gpu_matches_cpu_at_the_highest_sh_order() {
+    let ctx = gpu();
+    let mut s = bright(rough_field(24, 18, 9));
+    s.gi.bounces = 1;
+    for q in [hfgi::scene::model::Quality::Paper, hfgi::scene::model::Quality::Ultra] {
+        s.gi = s.gi.with_quality(q);
+        s.gi.sh_order = 8;
+        compare(&ctx, &s, &format!("n=8 quality={q}"));
+    }
+}

@@ -296,7 +296,7 @@ fn quality_presets_resolve_every_knob_and_explicit_knobs_override_them() {
     assert_eq!(h.azimuths, 24, "an explicit knob overrides the preset");
     assert_eq!(GiSettings { azimuths: 64, ..h.clone() }, GiSettings::preset(Quality::High));
     let u = parse_with("", &["gi.quality=ultra", "gi.level0=bspline"]).unwrap().gi;
-    assert_eq!((u.quality, u.level0, u.sh_order), (Quality::Ultra, Level0::Bspline, 6));
+    assert_eq!((u.quality, u.level0, u.sh_order), (Quality::Ultra, Level0::Bspline, 8));
     // The ladder is monotone in every sampling knob.
     let ladder: Vec<GiSettings> =
         [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra].map(GiSettings::preset).to_vec();

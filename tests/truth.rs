@@ -138,6 +138,18 @@ fn gpu_reference_matches_the_cpu_reference() {
         assert!(d.max(i).max(t) <= 1e-4, "GPU and CPU references differ: {d:e} {i:e} {t:e}");
         assert!(calls >= 3, "progress is reported");
     }
+    // The SH-visibility reference at the presets' higher orders (high: 6, ultra: 8).
+    for n in [6, 8] {
+        let mut sn = s.clone();
+        sn.gi.sh_order = n;
+        sn.gi.bounces = 1;
+        let settings = TruthSettings { sh_visibility: true, ..fast };
+        let cpu = render_truth(&sn, &settings, &mut |_, _| {}).unwrap();
+        let gpu = hfgi::frame::truth::render_truth_gpu(&ctx, &sn, &settings, &mut |_, _| {}).unwrap();
+        let (d, i) = (rel_l2(&as32(&gpu.direct), &cpu.direct), rel_l2(&as32(&gpu.indirect), &cpu.indirect));
+        eprintln!("SH-visibility, order {n}: GPU vs CPU reference: direct {d:.2e}, indirect {i:.2e}");
+        assert!(d.max(i) <= 1e-4, "GPU and CPU references differ at order {n}: {d:e} {i:e}");
+    }
     // Periodic, steep and with a pole cap: the wrap path and the full-circle cap samples.
     let mut p = scene(rough_field(16, 12, 3));
     p.wrap = true;

@@ -1,17 +1,17 @@
 // hfgi — the per-azimuth elevation basis (src/math/elevation.rs; docs/accuracy.md §4).
-// Requires the specialization constants HFGI_N (SH order n) and HFGI_NE (values per azimuth: n
-// for the paper's NLP basis, n(n+1)/2 for the `legendre` basis) and, for the latter, the buffer
-//     layout(std430, binding = N) readonly buffer Elev { float hfgi_elev[]; };
-// holding `math::elevation::fourier_table(n)`: per (l, m) in index order l(l+1)/2 + m, 2n + 1
-// values [c_0, α_1..α_n, β_1..β_n] of g_lm(ω) = P_l^m(sin ω) cos ω as a trigonometric polynomial.
+// Requires the specialization constants HFGI_N (SH order n) and HFGI_NE (values per azimuth,
+// math::elevation::gpu_size: n for the paper's NLP basis, the 2n + 1 Fourier moments for the
+// `legendre` basis, whose wedge matrices the host has multiplied by the Fourier table).
 #ifndef HFGI_ELEVATION_GLSL
 #define HFGI_ELEVATION_GLSL
 #include "hfgi_nlp.glsl"
 
-// e_lm(a, b) = ∫_a^b P_l^m(sin ω) cos ω dω = c_0 Δ + Σ_k (2/k) sin(kΔ/2) (α_k cos kμ + β_k sin kμ),
-// Δ = b − a, μ = (a + b)/2: every term is proportional to sin(kΔ/2), so a thin interval keeps its
-// precision relative to its own width. sin(kΔ/2), cos kμ, sin kμ by rotation (angle addition).
-void hfgi_legendre_interval(float a, float b, out float e[HFGI_NE]) {
+// The 2n + 1 Fourier moments of the indicator of [a, b] (math::elevation::fourier_moments):
+// [Δ, (2/k) sin(kΔ/2) cos kμ, (2/k) sin(kΔ/2) sin kμ], k = 1..n, Δ = b − a, μ = (a + b)/2. Every
+// term is proportional to sin(kΔ/2), so a thin interval keeps its precision relative to its own
+// width; sin(kΔ/2), cos kμ, sin kμ by rotation (angle addition). The integrals
+// e_lm = Σ_f T[lm][f] · moment_f never appear: the host folds T into the wedge matrices.
+void hfgi_fourier_moments(float a, float b, out float e[HFGI_NE]) {
     for (int i = 0; i < HFGI_NE; ++i) e[i] = 0.0;
     if (b <= a) return;
     float d = b - a;
@@ -19,13 +19,11 @@ void hfgi_legendre_interval(float a, float b, out float e[HFGI_NE]) {
     float mu = 0.5 * (a + b);
     float sh1 = sin(h), ch1 = cos(h), sm1 = sin(mu), cm1 = cos(mu);
     float shk = sh1, chk = ch1, smk = sm1, cmk = cm1; // k = 1
-    int row = 2 * HFGI_N + 1;
-    for (int i = 0; i < HFGI_NE; ++i) e[i] = hfgi_elev[i * row] * d;
+    e[0] = d;
     for (int k = 1; k <= HFGI_N; ++k) {
         float w = 2.0 / float(k) * shk;
-        for (int i = 0; i < HFGI_NE; ++i) {
-            e[i] += w * (hfgi_elev[i * row + k] * cmk + hfgi_elev[i * row + HFGI_N + k] * smk);
-        }
+        e[k] = w * cmk;
+        e[HFGI_N + k] = w * smk;
         float s2 = shk * ch1 + chk * sh1, c2 = chk * ch1 - shk * sh1;
         shk = s2;
         chk = c2;
@@ -40,7 +38,7 @@ void hfgi_elevation(float a, float b, out float e[HFGI_NE]) {
     if (HFGI_NE == HFGI_N) {
         hfgi_interval(a, b, e);
     } else {
-        hfgi_legendre_interval(a, b, e);
+        hfgi_fourier_moments(a, b, e);
     }
 }
 

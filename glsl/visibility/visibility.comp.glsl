@@ -9,7 +9,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // pyramid levels n_v
-layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or n(n+1)/2 (legendre)
+layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -18,7 +18,6 @@ layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
 layout(std430, binding = 3) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ, lo, hi
 layout(std430, binding = 4) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE, row-major
 layout(std430, binding = 5) buffer Vis { float hfgi_vis[]; };                  // accumulated over azimuth chunks
-layout(std430, binding = 6) readonly buffer Elev { float hfgi_elev[]; };      // hfgi_elevation.glsl
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"

@@ -47,7 +47,6 @@ pub struct IndirectPass {
 const U: usize = 3;
 const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
-const ELEVATION: usize = 6;
 
 impl IndirectPass {
     pub fn new(ctx: &Context, pyramid: &HeightPyramid, shade: &ShadePass, scene: &Scene) -> Result<Self> {
@@ -58,11 +57,8 @@ impl IndirectPass {
         let vector = vector_pyramid(scene);
         let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
         let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
-        let fold: Vec<f32> = azimuth::fold(n, &set, gi.interpolation, gi.elevation_basis)
-            .iter()
-            .flat_map(|a| a.data.iter().map(|&v| v as f32))
-            .collect();
-        let elev: Vec<f32> = elevation::fourier_table(n).iter().map(|&v| v as f32).collect();
+        let fold = super::shared::gpu_fold(n, &set, gi);
+        let ladder = scan_steps(gi, pyramid.layout().count());
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -74,11 +70,10 @@ impl IndirectPass {
             for (name, size) in [
                 ("hfgi.indirect.samples", samples.len() as u64 * 16),
                 ("hfgi.indirect.fold", fold.len() as u64 * 4),
-                ("hfgi.indirect.radiance_level", scan_steps(gi, pyramid.layout().count()).len() as u64 * 4),
+                ("hfgi.indirect.radiance_level", ladder.len() as u64 * 4),
                 ("hfgi.indirect.u", u_bytes),
                 ("hfgi.indirect.bounce", (2 * w * h * 16) as u64),
                 ("hfgi.indirect.incident", if vector { (w * h * n * n * 16) as u64 } else { 16 }),
-                ("hfgi.indirect.elevation", elev.len() as u64 * 4),
             ] {
                 bufs.push(Buffer::new(ctx, name, size.max(16), usage, MemoryLocation::GpuOnly)?);
             }
@@ -100,9 +95,9 @@ impl IndirectPass {
             // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
             let layout = pyramid.layout();
             let n_u = rad.pyramid.layout().count();
-            let levels: Vec<u32> = scan_steps(gi, layout.count())
-                .into_iter()
-                .map(|tau| {
+            let levels: Vec<u32> = ladder
+                .iter()
+                .map(|&tau| {
                     let t = w.max(h) as f64 * tau;
                     radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32
                 })
@@ -110,17 +105,16 @@ impl IndirectPass {
             memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
-            memory::upload_f32(ctx, &bufs[ELEVATION], 0, &elev)?;
             let scan = ComputePipeline::new(
                 ctx,
                 &shaders::INDIRECT_SCAN_COMP,
-                &[DescriptorKind::StorageBuffer; 12],
+                &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<IndirectPush>() as u32,
                 &[
                     (0, n as u32),
                     (1, layout.count() as u32),
                     (2, vector as u32),
-                    (3, elevation::size(gi.elevation_basis, n) as u32),
+                    (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
                 ],
                 1,
             )?;
@@ -142,7 +136,6 @@ impl IndirectPass {
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[U]),
                     Bind::Buffer(consts),
-                    Bind::Buffer(&bufs[ELEVATION]),
                 ],
             )?;
             let sh = ComputePipeline::new(
@@ -203,7 +196,7 @@ impl IndirectPass {
             sample_offset: 0,
             pad: [0; 3],
         };
-        let ladder = scan_steps(gi, pyramid.layout().count()).len() as u32;
+        let e = elevation::gpu_size(gi.elevation_basis, n);
         Ok(Self {
             radiance: radiance.expect("radiance"),
             scan: scan_pipe,
@@ -211,11 +204,7 @@ impl IndirectPass {
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
-            chunks: azimuth_chunks(
-                push.sample_count,
-                ladder * elevation::size(gi.elevation_basis, n) as u32,
-                INDIRECT_LOOP_BUDGET,
-            ),
+            chunks: azimuth_chunks(push.sample_count, ((ladder.len() + n * n) * e) as u32, INDIRECT_LOOP_BUDGET),
             push,
             shade_push: shade.push(),
         })

@@ -39,14 +39,28 @@ pub const FLAG_TANGENT: u32 = 4;
 pub const FLAG_ACCUMULATE: u32 = 8;
 
 /// Loop iterations one invocation of the visibility pass may run per dispatch, counted as
-/// `ladder + n²·e` per azimuth (the scan, then the fold `A_j v_j`; `e` values per azimuth).
+/// `ladder + n²·e` per azimuth (the scan, then the fold `A_j v_j`; `e` values per azimuth,
+/// `math::elevation::gpu_size`). Loops the compiler unrolls (constant trip counts) do not count;
+/// the budget leaves room for those it does not.
 /// lavapipe silently ends an invocation's loops after 65535 iterations in total
 /// (docs/accuracy.md §1).
 pub const VISIBILITY_LOOP_BUDGET: u32 = 40_000;
-/// The same for the indirect scan, counted as `ladder · e` per azimuth (every casting-set member
-/// adds an `e`-vector): 16 azimuths × 130 samples × 21 (44k) was measured intact, 128 × 130 × 21
-/// lost most of the indirect light.
+/// The same for the indirect scan, counted as `(ladder + n²) · e` per azimuth (every
+/// casting-set member adds an `e`-vector, then the fold): 16 azimuths × 130 samples × 21 (44k)
+/// was measured intact, 128 × 130 × 21 lost most of the indirect light, and so did order 8 when
+/// each member still evaluated the 36 legendre integrals (8 × 36 loop iterations a member).
 pub const INDIRECT_LOOP_BUDGET: u32 = 40_000;
+
+/// The folded wedge matrices `A_j` of `set` as the scan shaders read them: `n² × e` per azimuth,
+/// row-major, f32, acting on the GPU's per-azimuth values (`math::elevation::gpu_size`: the NLP
+/// coefficients, or the legendre basis's Fourier moments).
+pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::scene::model::GiSettings) -> Vec<f32> {
+    use crate::math::{azimuth, elevation};
+    azimuth::fold(n, set, gi.interpolation, gi.elevation_basis)
+        .into_iter()
+        .flat_map(|a| elevation::fold_to_moments(gi.elevation_basis, n, a).data.into_iter().map(|v| v as f32))
+        .collect()
+}
 
 /// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / cost`
 /// samples each (at least one; `cost` loop iterations per azimuth), one dispatch each, the later

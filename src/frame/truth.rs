@@ -54,7 +54,10 @@ pub fn ray_iterations(w: usize, h: usize, wrap: bool, settings: &TruthSettings) 
 /// sweep of the blocked nodes) plus the Gauss–Legendre nodes with their SH loops must fit
 /// [`LOOP_BUDGET`]. Cap samples (one ray and the nodes) use the same chunk.
 pub fn azimuth_chunk(w: usize, h: usize, wrap: bool, settings: &TruthSettings, n: usize) -> u32 {
-    let per_azimuth = 2 * ray_iterations(w, h, wrap, settings) + settings.nodes as u64 * (3 * (n * n) as u64 + 16) + 4;
+    // Per node 12·n² + 16: at order 6 the bounce pass in SH mode overran with 3·n² + 16 (the
+    // SH evaluation and the RGB accumulation are loops the compiler keeps at that order; the
+    // GPU-vs-CPU test at orders 6 and 8 in tests/truth.rs found it: 138% off).
+    let per_azimuth = 2 * ray_iterations(w, h, wrap, settings) + settings.nodes as u64 * (12 * (n * n) as u64 + 16) + 4;
     (LOOP_BUDGET / per_azimuth).clamp(1, 64) as u32
 }
 

@@ -60,8 +60,6 @@ pub struct VisibilityPass {
     samples: Buffer,
     fold: Buffer,
     vis: Buffer,
-    /// `math::elevation::fourier_table(n)` (read only with the legendre basis).
-    elev: Buffer,
     sets: Vec<SetRange>,
     n: usize,
     push: VisibilityPush,
@@ -80,15 +78,12 @@ impl VisibilityPass {
         let mut samples: Vec<[f32; 4]> = Vec::new();
         let mut fold: Vec<f32> = Vec::new();
         let mut sets = Vec::new();
-        let elev: Vec<f32> = elevation::fourier_table(n).iter().map(|&v| v as f32).collect();
         for (kind, set) in &light_sets {
             let first = samples.len() as u32;
             for &phi in &set.phi {
                 samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
             }
-            for a in azimuth::fold(n, set, scene.gi.interpolation, scene.gi.elevation_basis) {
-                fold.extend(a.data.iter().map(|&v| v as f32));
-            }
+            fold.extend(super::shared::gpu_fold(n, set, &scene.gi));
             sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
         }
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
@@ -113,27 +108,19 @@ impl VisibilityPass {
                 MemoryLocation::GpuOnly,
             )?);
             parts.push(Buffer::new(ctx, "hfgi.visibility.v", vis_floats * 4, usage, MemoryLocation::GpuOnly)?);
-            parts.push(Buffer::new(
-                ctx,
-                "hfgi.visibility.elevation",
-                elev.len() as u64 * 4,
-                usage,
-                MemoryLocation::GpuOnly,
-            )?);
             if !samples.is_empty() {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
                 memory::upload_f32(ctx, &parts[1], 0, &fold)?;
             }
-            memory::upload_f32(ctx, &parts[3], 0, &elev)?;
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::VISIBILITY_VISIBILITY_COMP,
-                &[DescriptorKind::StorageBuffer; 7],
+                &[DescriptorKind::StorageBuffer; 6],
                 std::mem::size_of::<VisibilityPush>() as u32,
                 &[
                     (0, n as u32),
                     (1, pyramid.layout().count() as u32),
-                    (2, elevation::size(scene.gi.elevation_basis, n) as u32),
+                    (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
                 ],
                 1,
             )?);
@@ -147,7 +134,6 @@ impl VisibilityPass {
                     Bind::Buffer(&parts[0]),
                     Bind::Buffer(&parts[1]),
                     Bind::Buffer(&parts[2]),
-                    Bind::Buffer(&parts[3]),
                 ],
             )
         })();
@@ -161,7 +147,6 @@ impl VisibilityPass {
                 return Err(e);
             }
         };
-        let elev_buf = parts.pop().expect("elevation");
         let vis = parts.pop().expect("v");
         let fold_buf = parts.pop().expect("fold");
         let samples_buf = parts.pop().expect("samples");
@@ -183,12 +168,11 @@ impl VisibilityPass {
             samples: samples_buf,
             fold: fold_buf,
             vis,
-            elev: elev_buf,
             sets,
             n,
             push,
             loop_cost: (crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
-                + n2 * elevation::size(scene.gi.elevation_basis, n)) as u32,
+                + n2 * elevation::gpu_size(scene.gi.elevation_basis, n)) as u32,
         })
     }
 
@@ -252,7 +236,7 @@ impl VisibilityPass {
     }
     /// Bytes of GPU memory held.
     pub fn memory_bytes(&self) -> u64 {
-        self.samples.size + self.fold.size + self.vis.size + self.elev.size
+        self.samples.size + self.fold.size + self.vis.size
     }
 
     pub fn destroy(mut self, ctx: &Context) {
@@ -260,6 +244,5 @@ impl VisibilityPass {
         self.samples.destroy(ctx);
         self.fold.destroy(ctx);
         self.vis.destroy(ctx);
-        self.elev.destroy(ctx);
     }
 }

@@ -24,6 +24,7 @@
 use std::f64::consts::{FRAC_PI_2, PI, SQRT_2};
 
 use super::quadrature::gauss_legendre_on;
+use super::wedge::Mat;
 use super::{check_order, legendre, nlp, sh};
 use crate::scene::model::ElevationBasis;
 
@@ -108,21 +109,63 @@ pub fn fourier_table(n: usize) -> Vec<f64> {
     out
 }
 
-/// `e_lm(a, b)` from [`fourier_table`], the way the GPU evaluates it (for the tests).
+/// The `2n + 1` Fourier moments of the indicator of `[a, b]` (zero if `b ≤ a`):
+/// `[Δ, (2/k) sin(kΔ/2) cos kμ (k = 1..n), (2/k) sin(kΔ/2) sin kμ (k = 1..n)]`, `Δ = b − a`,
+/// `μ = (a + b)/2`, so that `e_lm(a, b) = Σ_f T[lm][f] · moment_f` with `T` the
+/// [`fourier_table`]. The GPU accumulates these per azimuth and meets `T` only once, folded into
+/// the wedge matrices ([`fold_to_moments`]).
+pub fn fourier_moments(n: usize, a: f64, b: f64) -> Vec<f64> {
+    let mut out = vec![0.0; 2 * n + 1];
+    if b <= a {
+        return out;
+    }
+    let (d, mu) = (b - a, 0.5 * (a + b));
+    out[0] = d;
+    for k in 1..=n {
+        let kf = k as f64;
+        let w = 2.0 / kf * (0.5 * kf * d).sin();
+        out[k] = w * (kf * mu).cos();
+        out[n + k] = w * (kf * mu).sin();
+    }
+    out
+}
+
+/// `e_lm(a, b)` from [`fourier_table`] and [`fourier_moments`] (for the tests).
 pub fn legendre_interval_fourier(n: usize, table: &[f64], a: f64, b: f64) -> Vec<f64> {
     let row = 2 * n + 1;
-    let (d, mu) = (b - a, 0.5 * (a + b));
-    (0..n * (n + 1) / 2)
-        .map(|e| {
-            let r = &table[e * row..(e + 1) * row];
-            let mut v = r[0] * d;
-            for k in 1..=n {
-                let kf = k as f64;
-                v += 2.0 / kf * (0.5 * kf * d).sin() * (r[k] * (kf * mu).cos() + r[n + k] * (kf * mu).sin());
+    let f = fourier_moments(n, a, b);
+    (0..n * (n + 1) / 2).map(|e| table[e * row..(e + 1) * row].iter().zip(&f).map(|(t, m)| t * m).sum()).collect()
+}
+
+/// Values per azimuth on the GPU: `n` NLP coefficients, or for the `legendre` basis the
+/// `2n + 1` [`fourier_moments`] (fewer than the `n(n+1)/2` integrals from order 4 on: 9, 13, 17
+/// against 10, 21, 36 at orders 4, 6, 8).
+pub fn gpu_size(basis: ElevationBasis, n: usize) -> usize {
+    match basis {
+        ElevationBasis::Nlp => n,
+        ElevationBasis::Legendre => 2 * n + 1,
+    }
+}
+
+/// A matrix acting on basis vectors (`cols = size(basis, n)`), made to act on the GPU's values
+/// ([`gpu_size`]): unchanged for NLP, `A · T` for the legendre basis (`T` the [`fourier_table`]
+/// as a `n(n+1)/2 × (2n + 1)` matrix). Exact up to rounding: `e = T · moments`.
+pub fn fold_to_moments(basis: ElevationBasis, n: usize, a: Mat) -> Mat {
+    if basis == ElevationBasis::Nlp {
+        return a;
+    }
+    let (e, f) = (size(basis, n), 2 * n + 1);
+    assert_eq!(a.cols, e, "fold_to_moments: {} columns, expected {e}", a.cols);
+    let t = fourier_table(n);
+    let mut out = Mat::zeros(a.rows, f);
+    for r in 0..a.rows {
+        for (i, &v) in a.row(r).iter().enumerate() {
+            for c in 0..f {
+                out.data[r * f + c] += v * t[i * f + c];
             }
-            v
-        })
-        .collect()
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -158,6 +201,27 @@ mod tests {
         for l in 0..n {
             let want = v[l] / ((2 * l + 1) as f64 / 2.0).sqrt();
             assert!((e[index(l, 0)] - want).abs() < 1e-13, "l={l}: {} vs {want}", e[index(l, 0)]);
+        }
+    }
+
+    #[test]
+    fn folded_moments_equal_the_integrals() {
+        // A · e(a, b) == fold_to_moments(A) · moments(a, b), for thin and wide intervals.
+        for n in [2usize, 4, 6, 8] {
+            let e = size(ElevationBasis::Legendre, n);
+            let mut a = Mat::zeros(n * n, e);
+            for (i, v) in a.data.iter_mut().enumerate() {
+                *v = ((i * 7 + 3) as f64 * 0.37).sin();
+            }
+            let folded = fold_to_moments(ElevationBasis::Legendre, n, a.clone());
+            for (lo, hi) in [(-1.5, FRAC_PI_2), (-0.3, 0.2), (0.1, 0.1 + 1e-6)] {
+                let want = a.mul_vec(&legendre_interval(n, lo, hi));
+                let got = folded.mul_vec(&fourier_moments(n, lo, hi));
+                let scale = want.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for (x, y) in want.iter().zip(&got) {
+                    assert!((x - y).abs() <= 1e-10 * scale, "n={n} [{lo},{hi}]: {x} vs {y}");
+                }
+            }
         }
     }
 }

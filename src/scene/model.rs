@@ -246,17 +246,17 @@ impl Default for GiSettings {
 impl GiSettings {
     /// The knobs of a quality preset (docs/accuracy.md §4 documents and measures the ladder).
     /// Scene content (bounces, key-light azimuths, glossy pyramid, amortisation, the pyramid
-    /// mode) is not part of a preset; the SH order is (`high` and `ultra` use order 6, which
-    /// lowers the SH truncation floor against the exact reference; an order-4 environment is
-    /// used as given, its higher bands zero).
+    /// mode) is not part of a preset; the SH order is (`high` uses order 6 and `ultra` order 8,
+    /// which lowers the SH truncation floor against the exact reference; an order-4 environment
+    /// is used as given, its higher bands zero).
     pub fn preset(q: Quality) -> Self {
         // (n, m, k, o, sub-sampling, k_u, o_u, near steps)
         let (n, m, k, o, sub, ku, ou, near) = match q {
             Quality::Draft => (4, 16, 2, 4, 2, 2, 2, 2),
             Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4),
             Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0),
-            Quality::High => (6, 64, 8, 8, 1, 8, 6, 16),
-            Quality::Ultra => (6, 128, 24, 8, 1, 16, 8, 64),
+            Quality::High => (6, 64, 12, 8, 1, 8, 6, 16),
+            Quality::Ultra => (8, 128, 24, 8, 1, 16, 8, 64),
         };
         let paper = q == Quality::Paper;
         Self {

@@ -11,7 +11,7 @@ use std::io::Write;
 use std::ops::Deref;
 use std::sync::{Arc, Mutex};
 
-use hfgi::vk::{Context, ContextOptions};
+use hfgi::vk::{Context, ContextOptions, Recorder};
 
 pub struct Gpu {
     ctx: Option<Context>,
@@ -82,4 +82,19 @@ pub fn rough_field(w: usize, h: usize, seed: u32) -> hfgi::scene::HeightField {
         })
         .collect();
     hfgi::scene::HeightField::new("test field", w, h, data, 16384).unwrap()
+}
+
+/// One frame of `scene` on a fresh `Renderer` (recorded into one command buffer, submitted and
+/// waited for), its layers read back.
+pub fn render_layers(ctx: &Context, scene: &hfgi::scene::model::Scene) -> hfgi::frame::ShadingLayers {
+    let mut r = hfgi::frame::Renderer::new(ctx, scene).unwrap();
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(ctx, cmd, None);
+        r.record(&mut rec);
+        Ok(())
+    })
+    .unwrap();
+    let layers = r.read_layers(ctx).unwrap();
+    r.destroy(ctx);
+    layers
 }

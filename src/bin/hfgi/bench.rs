@@ -175,6 +175,7 @@ fn ablation(base: &GiSettings, presets_only: bool) -> Vec<(String, GiSettings)> 
         out.push(fix(&format!("near_steps={}", all.near_steps), &|g| g.near_steps = all.near_steps));
         out.push(fix("scan_reach=diagonal", &|g| g.scan_reach = all.scan_reach));
         out.push(fix("omega_min=tangent", &|g| g.omega_min = all.omega_min));
+        out.push(fix("elevation_basis=legendre", &|g| g.elevation_basis = all.elevation_basis));
     }
     for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {
         out.push((format!("quality={q}"), with_preset(base, q)));
@@ -402,8 +403,10 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
         bar.finish_and_clear();
         ctx.check_validation()?;
+        // After every scene, so that a long run that is stopped keeps what it measured.
+        write_outputs(&a, &rows, &references, &info, clock)?;
     }
-    write_outputs(&a, &rows, &references, &info, clock)
+    Ok(())
 }
 
 fn write_outputs(
