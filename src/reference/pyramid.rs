@@ -140,12 +140,16 @@ impl CpuPyramid {
 
     /// True-pyramid sampling: B-spline on level `i` at `(x, y)` in level-0 texel units.
     pub fn sample_pyramid(&self, i: usize, x: f64, y: f64) -> f64 {
+        let (w, h, lx, ly) = self.level_coords(i, x, y);
+        bspline(&self.levels[i], w, h, lx, ly, self.wrap)
+    }
+
+    /// Level `i`'s size and the position `(x, y)` (level-0 texel units) in its texels.
+    fn level_coords(&self, i: usize, x: f64, y: f64) -> (usize, usize, f64, f64) {
         let l0 = self.layout.levels[0];
         let l = self.layout.levels[i];
         let (w, h) = (l.width as usize, l.height as usize);
-        let lx = rescale(x, l0.width as usize, w);
-        let ly = rescale(y, l0.height as usize, h);
-        bspline(&self.levels[i], w, h, lx, ly, self.wrap)
+        (w, h, rescale(x, l0.width as usize, w), rescale(y, l0.height as usize, h))
     }
 
     /// Stack sampling: bilinear on stack plane `i` at `(x, y)` in level-0 texel units (mapped
@@ -172,11 +176,7 @@ impl CpuPyramid {
     /// Level `i` unfiltered: bilinear on its texels at `(x, y)` in level-0 texel units
     /// (`gi.level0 = "bilinear"` reads level 0 this way).
     pub fn sample_raw(&self, i: usize, x: f64, y: f64) -> f64 {
-        let l0 = self.layout.levels[0];
-        let l = self.layout.levels[i];
-        let (w, h) = (l.width as usize, l.height as usize);
-        let lx = rescale(x, l0.width as usize, w);
-        let ly = rescale(y, l0.height as usize, h);
+        let (w, h, lx, ly) = self.level_coords(i, x, y);
         bilinear(&self.levels[i], w, h, lx, ly, self.wrap)
     }
 

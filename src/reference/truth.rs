@@ -268,47 +268,62 @@ impl Setup<'_> {
         (0..a).map(move |k| (k as f64 + 0.5) * 2.0 * PI / a as f64)
     }
 
+    /// The azimuth integral at texel `(i, j)`: `per_azimuth(acc, φ, profile)` for every azimuth of
+    /// the reference, then `E` (exact) or the `n²` SH coefficients (SH-visibility) of `acc`.
+    fn per_texel(&self, i: usize, j: usize, mut per_azimuth: impl FnMut(&mut Acc, f64, &Profile)) -> Vec<[f64; 3]> {
+        let n = self.scene.gi.sh_order;
+        let surf = self.surface();
+        let p = j * surf.width + i;
+        let mut acc = Acc {
+            normal: DVec3::from_array(self.nrm[p]),
+            dphi: 2.0 * PI / self.settings.azimuths as f64,
+            e: [0.0; 3],
+            sh: vec![[0.0; 3]; n * n],
+            basis: ShBasis::new(n),
+        };
+        for phi in self.azimuths() {
+            per_azimuth(&mut acc, phi, &Profile::trace(&surf, i, j, phi, self.settings));
+        }
+        if self.settings.sh_visibility {
+            acc.sh
+        } else {
+            vec![acc.e]
+        }
+    }
+
     /// Direct light of texel `(i, j)`: `E` (exact) or `V_k` in `.0` (SH-visibility).
     fn direct(&self, i: usize, j: usize) -> Vec<[f64; 3]> {
-        let n = self.scene.gi.sh_order;
-        let (surf, s) = (self.surface(), self.scene.texel_size);
-        let p = j * surf.width + i;
-        let nv = DVec3::from_array(self.nrm[p]);
-        let dphi = 2.0 * PI / self.settings.azimuths as f64;
-        let mut e = [0.0; 3];
-        let mut vis = vec![[0.0; 3]; n * n];
-        let mut basis = ShBasis::new(n);
-        for phi in self.azimuths() {
-            let hor = Profile::trace(&surf, i, j, phi, self.settings).horizon(s);
+        let s = self.scene.texel_size;
+        let mut out = self.per_texel(i, j, |acc, phi, prof| {
+            let hor = prof.horizon(s);
             if self.settings.sh_visibility {
                 for (om, wt) in nodes_on(&self.gauss, hor, FRAC_PI_2) {
-                    let y = basis.eval(direction(om, phi).to_array());
-                    for (v, yk) in vis.iter_mut().zip(y) {
-                        v[0] += dphi * wt * om.cos() * yk;
+                    let y = acc.basis.eval(direction(om, phi).to_array());
+                    for (v, yk) in acc.sh.iter_mut().zip(y) {
+                        v[0] += acc.dphi * wt * om.cos() * yk;
                     }
                 }
-                continue;
+                return;
             }
-            let lo = hor.max(tangent_elevation(self.nrm[p], phi));
+            let lo = hor.max(tangent_elevation(acc.normal.to_array(), phi));
             for (om, wt) in nodes_on(&self.gauss, lo, FRAC_PI_2) {
                 let d = direction(om, phi);
-                let y = basis.eval(d.to_array());
-                let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
-                for (ch, ec) in e.iter_mut().enumerate() {
+                let y = acc.basis.eval(d.to_array());
+                let cosf = acc.normal.dot(d).max(0.0) * om.cos() * wt * acc.dphi;
+                for (ch, ec) in acc.e.iter_mut().enumerate() {
                     *ec += cosf * self.light.iter().zip(y).map(|(l, yk)| l[ch] * yk).sum::<f64>();
                 }
             }
-        }
-        if self.settings.sh_visibility {
-            return vis;
-        }
-        for (key, samples) in &self.caps {
-            let c = self.cap(key, samples, i, j);
-            for (ec, r) in e.iter_mut().zip(&key.radiance) {
-                *ec += c * r;
+        });
+        if !self.settings.sh_visibility {
+            for (key, samples) in &self.caps {
+                let c = self.cap(key, samples, i, j);
+                for (ec, r) in out[0].iter_mut().zip(&key.radiance) {
+                    *ec += c * r;
+                }
             }
         }
-        vec![e]
+        out
     }
 
     /// `∫_cap∩open max(N·ω, 0) dω` at texel `(i, j)` over the cap's azimuth samples.
@@ -335,19 +350,11 @@ impl Setup<'_> {
     /// One bounce at texel `(i, j)` from the previous bounce's exit radiance `chans` (per
     /// channel): `E` (exact) or `U_k` (SH-visibility).
     fn bounce(&self, chans: &[Vec<f64>], i: usize, j: usize) -> Vec<[f64; 3]> {
-        let n = self.scene.gi.sh_order;
         let (surf, s) = (self.surface(), self.scene.texel_size);
-        let p = j * surf.width + i;
-        let nv = DVec3::from_array(self.nrm[p]);
-        let dphi = 2.0 * PI / self.settings.azimuths as f64;
-        let mut e = [0.0; 3];
-        let mut u = vec![[0.0; 3]; n * n];
-        let mut basis = ShBasis::new(n);
-        for phi in self.azimuths() {
-            let prof = Profile::trace(&surf, i, j, phi, self.settings);
-            let (hor, lo) = (prof.horizon(s), tangent_elevation(self.nrm[p], phi));
+        self.per_texel(i, j, |acc, phi, prof| {
+            let (hor, lo) = (prof.horizon(s), tangent_elevation(acc.normal.to_array(), phi));
             if hor <= lo {
-                continue;
+                return;
             }
             let nodes: Vec<(f64, f64)> = nodes_on(&self.gauss, lo, hor).collect();
             let omegas: Vec<f64> = nodes.iter().map(|v| v.0).collect();
@@ -356,26 +363,31 @@ impl Setup<'_> {
                     chans.iter().map(|c| bilinear(c, surf.width, surf.height, q[0], q[1], surf.wrap)).collect();
                 let d = direction(*om, phi);
                 if self.settings.sh_visibility {
-                    let y = basis.eval(d.to_array());
-                    for (uk, yk) in u.iter_mut().zip(y) {
+                    let y = acc.basis.eval(d.to_array());
+                    for (uk, yk) in acc.sh.iter_mut().zip(y) {
                         for ch in 0..3 {
-                            uk[ch] += dphi * wt * om.cos() * yk * r[ch];
+                            uk[ch] += acc.dphi * wt * om.cos() * yk * r[ch];
                         }
                     }
                 } else {
-                    let cosf = nv.dot(d).max(0.0) * om.cos() * wt * dphi;
-                    for ch in 0..3 {
-                        e[ch] += cosf * r[ch];
+                    let cosf = acc.normal.dot(d).max(0.0) * om.cos() * wt * acc.dphi;
+                    for (ec, rc) in acc.e.iter_mut().zip(&r) {
+                        *ec += cosf * rc;
                     }
                 }
             }
-        }
-        if self.settings.sh_visibility {
-            u
-        } else {
-            vec![e]
-        }
+        })
     }
+}
+
+/// One texel's accumulators (`Setup::per_texel`): its normal, the azimuth weight `2π/A`, the
+/// exact irradiance `e` and the SH-mode coefficients `sh`, with the SH evaluator.
+struct Acc {
+    normal: DVec3,
+    dphi: f64,
+    e: [f64; 3],
+    sh: Vec<[f64; 3]>,
+    basis: ShBasis,
 }
 
 /// The ground truth of `scene` (direct + `scene.gi.bounces` diffuse bounces). `progress` is
