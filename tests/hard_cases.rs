@@ -32,17 +32,10 @@ struct Frame {
 }
 
 fn render(ctx: &Context, s: &Scene) -> Frame {
-    let mut r = Renderer::new(ctx, s).unwrap();
-    ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(ctx, cmd, None);
-        r.record(&mut rec);
-        Ok(())
+    common::render_with(ctx, s, |ctx, r| Frame {
+        layers: r.read_layers(ctx).unwrap(),
+        buffers: r.debug_buffers(ctx).unwrap(),
     })
-    .unwrap();
-    let layers = r.read_layers(ctx).unwrap();
-    let buffers = r.debug_buffers(ctx).unwrap();
-    r.destroy(ctx);
-    Frame { layers, buffers }
 }
 
 fn field(name: &str, w: usize, h: usize, f: impl Fn(usize, usize) -> f64) -> HeightField {

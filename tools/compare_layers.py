@@ -2,6 +2,7 @@
 """Relative L2 error of shading EXRs against a reference, per layer (CONVENTIONS.md "Accuracy").
 
     tools/compare_layers.py REF.exr OTHER.exr [OTHER2.exr ...] [--names a,b,...] [--scale F]
+    tools/compare_layers.py REF.exr OTHER.exr --bias   (adds the signed bias Σ(X − R)/ΣR per layer)
     tools/compare_layers.py --mean OUT.exr A.exr B.exr ...   (writes the per-channel mean)
 
 err = ||X - R||_2 / ||R||_2 over all texels and the three channels, accumulated in float64,
@@ -76,6 +77,8 @@ def main():
     ap.add_argument("--scale", type=float, default=1.0,
                     help="multiply the printed errors (0.5 turns two seeds' mutual distance into "
                          "the Monte Carlo error of their mean)")
+    ap.add_argument("--bias", action="store_true",
+                    help="print the signed bias Σ(X − R) / ΣR per layer after each error")
     ap.add_argument("--ref-label", help="header label of the reference (default: its file name)")
     args = ap.parse_args()
     names = args.names.split(";") if args.names else [os.path.basename(p) for p in args.others]
@@ -99,7 +102,10 @@ def main():
             if not np.any(ref[layer]):
                 cells.append(f"ref = 0, ‖X‖₂ = {math.sqrt(float(np.sum(x[layer] ** 2))):.3g}")
                 continue
-            cells.append(f"{100 * args.scale * rel_l2(x[layer], ref[layer]):.3f}%")
+            cell = f"{100 * args.scale * rel_l2(x[layer], ref[layer]):.3f}%"
+            if args.bias:
+                cell += f" ({100 * float(np.sum(x[layer] - ref[layer]) / np.sum(ref[layer])):+.1f}%)"
+            cells.append(cell)
         print(f"| {name} | " + " | ".join(cells) + " |")
     sys.exit(1 if bad else 0)
 

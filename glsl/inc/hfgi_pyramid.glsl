@@ -62,12 +62,13 @@ struct hfgi_Scan {
     bool raw0;        // HFGI_FLAG_RAW_LEVEL0
     int first;        // first sample index: −near_steps (sub-texel samples, docs/accuracy.md §4)
     int end;          // one past the last: n_v + far_steps (samples beyond max(W, H) texels)
+    hfgi_Level l0;    // hfgi_table[0], read once per receiver
 };
 
 // Height at level `level` (hfgi_table) and level-0 position p0.
 float hfgi_height_at(hfgi_Scan s, uint level, vec2 p0) {
-    return hfgi_pyramid_at(hfgi_table[0], hfgi_table[level], level, p0, s.work, s.stack_mode, s.wrap,
-                           s.raw0 && level == 0u);
+    if (s.raw0 && level == 0u) return hfgi_bilinear_at(s.l0, hfgi_rescale(p0, s.n0, s.l0), s.wrap);
+    return hfgi_pyramid_at(s.l0, hfgi_table[level], level, p0, s.work, s.stack_mode, s.wrap, false);
 }
 
 // Pyramid level read by scan sample i (NS09 §5.2 level offset; docs/direct.md §2): the level
@@ -84,7 +85,7 @@ hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias,
     vec2 n0 = vec2(float(l0.width), float(l0.height));
     vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5;
     return hfgi_Scan(p, n0, work, level_step, level_bias, texel_size, stack_mode, wrap,
-                     (flags & HFGI_FLAG_RAW_LEVEL0) != 0u, -int(extent & 0xffffu), n_v + int(extent >> 16));
+                     (flags & HFGI_FLAG_RAW_LEVEL0) != 0u, -int(extent & 0xffffu), n_v + int(extent >> 16), l0);
 }
 
 // The near-field limit t → 0 of the blocking angle (with near_steps > 0; docs/accuracy.md §4):
@@ -111,18 +112,26 @@ float hfgi_scan_base(hfgi_Scan s, uint level) {
 }
 
 // Sample i of n_v along direction d: t_i = N·2^(−(n_v−1−i)/k) texels (i < 0: inside the first
-// texel; i ≥ n_v: past N, toward the far corner), q = p + t_i·d, level hfgi_scan_level, blocking
-// angle ω_i against `base` (the receiver at that level). False once q has left the domain (no
+// texel; i ≥ n_v: past N, toward the far corner), q = p + t_i·d, level hfgi_scan_level, and the
+// slope tan ω_i = Δh / t_i of eq. 15 against `base` (the receiver at that level): a scan compares
+// slopes and takes the atan only where a sample matters. False once q has left the domain (no
 // wrap), with a 1e-3 texel tolerance so that rays along the border do not depend on rounding
 // (docs/direct.md §2).
-bool hfgi_scan_sample(hfgi_Scan s, int i, int n_v, vec2 d, float base, out vec2 q, out float omega) {
+bool hfgi_scan_slope(hfgi_Scan s, int i, int n_v, vec2 d, float base, out vec2 q, out float slope) {
     float t = max(s.n0.x, s.n0.y) * exp2(-float(n_v - 1 - i) / float(s.level_step));
     q = s.p + t * d;
-    omega = 0.0;
+    slope = 0.0;
     if (!s.wrap && (q.x < -1e-3 || q.y < -1e-3 || q.x > s.n0.x - 1.0 + 1e-3 || q.y > s.n0.y - 1.0 + 1e-3)) return false;
     float dh = hfgi_height_at(s, hfgi_scan_level(i, s.level_bias, n_v), q) - base;
-    omega = atan(dh / (t * s.texel_size));
+    slope = dh / (t * s.texel_size);
     return true;
+}
+
+// The blocking angle ω_i = atan(slope) of sample i (eq. 15).
+bool hfgi_scan_sample(hfgi_Scan s, int i, int n_v, vec2 d, float base, out vec2 q, out float omega) {
+    bool ok = hfgi_scan_slope(s, i, n_v, d, base, q, omega);
+    omega = atan(omega);
+    return ok;
 }
 
 #endif

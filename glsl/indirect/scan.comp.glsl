@@ -67,15 +67,52 @@ vec3 normal_at(vec2 q, bool wrap) {
 // pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
 // direction back to the receiver about q's normal.
 // With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image.
+// The RGB radiance of level lv at level-0 position q: the three channels' planes share their
+// texel addresses, so they are computed once and each channel reads its four corners at its own
+// plane (the same values and arithmetic as hfgi_pyramid_at per channel). Pyramid mode (no stack,
+// not raw) reads each channel with hfgi_pyramid_at.
+vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool raw) {
+    hfgi_Level r0 = hfgi_radiance_table[0];
+    uint n_u = pc.radiance_levels;
+    vec2 n0 = vec2(float(r0.width), float(r0.height));
+    vec3 rad;
+    if (!raw && !stack_mode) {
+        for (uint c = 0u; c < 3u; ++c) {
+            uint e = c * n_u + lv;
+            rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap, false);
+        }
+        return rad;
+    }
+    hfgi_Level l = hfgi_radiance_table[lv];
+    ivec2 size = raw ? ivec2(int(l.width), int(l.height)) : ivec2(work);
+    vec2 pw = raw ? hfgi_rescale(q, n0, l) : (q + 0.5) * vec2(work) / n0 - 0.5;
+    vec2 fl = floor(pw);
+    vec2 f = pw - fl;
+    ivec2 i = ivec2(fl);
+    int x0 = hfgi_address(i.x, size.x, wrap), x1 = hfgi_address(i.x + 1, size.x, wrap);
+    int y0 = hfgi_address(i.y, size.y, wrap), y1 = hfgi_address(i.y + 1, size.y, wrap);
+    uvec4 at = uvec4(y0 * size.x + x0, y0 * size.x + x1, y1 * size.x + x0, y1 * size.x + x1);
+    for (uint c = 0u; c < 3u; ++c) {
+        uint e = c * n_u + lv;
+        if (raw) {
+            hfgi_Level lc = hfgi_radiance_table[e];
+            uvec4 k = at + lc.offset;
+            rad[c] = hfgi_bilerp(hfgi_radiance_levels[k.x] - lc.bias, hfgi_radiance_levels[k.y] - lc.bias,
+                                 hfgi_radiance_levels[k.z] - lc.bias, hfgi_radiance_levels[k.w] - lc.bias, f);
+        } else {
+            uvec4 k = at + e * work.x * work.y;
+            rad[c] = hfgi_bilerp(hfgi_radiance_stack[k.x], hfgi_radiance_stack[k.y], hfgi_radiance_stack[k.z],
+                                 hfgi_radiance_stack[k.w], f);
+        }
+    }
+    return rad;
+}
+
 vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stack_mode, bool wrap, bool raw0) {
     bool raw = raw0 && lv == 0u;
     hfgi_Level r0 = hfgi_radiance_table[0];
     uint n_u = pc.radiance_levels;
-    vec3 rad;
-    for (uint c = 0u; c < 3u; ++c) {
-        uint e = c * n_u + lv;
-        rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, stack_mode, wrap, raw);
-    }
+    vec3 rad = radiance_rgb(lv, q, work, stack_mode, wrap, raw);
     if (HFGI_VECTOR != 0) {
         vec3 nc = normal_at(q, wrap);
         vec3 s = -vec3(cos(omega) * d, sin(omega));
@@ -126,12 +163,14 @@ void main() {
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }
+        float running_slope = tan(running);
         for (int i = scan.first; i < scan.end; ++i) {
             vec2 q;
-            float omega;
+            float slope;
             float b = hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)];
-            if (!hfgi_scan_sample(scan, i, HFGI_NV, d, b, q, omega)) break;
-            if (omega > running) {
+            if (!hfgi_scan_slope(scan, i, HFGI_NV, d, b, q, slope)) break;
+            if (slope > running_slope) {
+                float omega = atan(slope);
                 // Casting-set member (eq. 6), seen over [running, ω): eq. 12 telescoped.
                 float seg[HFGI_NE];
                 hfgi_elevation(running, omega, seg);
@@ -139,6 +178,7 @@ void main() {
                                            pc.radiance_stack != 0u, wrap, scan.raw0);
                 for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
                 running = omega;
+                running_slope = slope;
             }
         }
         // eq. 19–21 folded: U += A_j u_j.

@@ -87,6 +87,16 @@ pub fn rough_field(w: usize, h: usize, seed: u32) -> hfgi::scene::HeightField {
 /// One frame of `scene` on a fresh `Renderer` (recorded into one command buffer, submitted and
 /// waited for), its layers read back.
 pub fn render_layers(ctx: &Context, scene: &hfgi::scene::model::Scene) -> hfgi::frame::ShadingLayers {
+    render_with(ctx, scene, |ctx, r| r.read_layers(ctx).unwrap())
+}
+
+/// Records one frame of `scene` into one submit and waits, then returns what `read` reads back
+/// from the renderer (before it is destroyed).
+pub fn render_with<T>(
+    ctx: &Context,
+    scene: &hfgi::scene::model::Scene,
+    read: impl FnOnce(&Context, &hfgi::frame::Renderer) -> T,
+) -> T {
     let mut r = hfgi::frame::Renderer::new(ctx, scene).unwrap();
     ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(ctx, cmd, None);
@@ -94,7 +104,7 @@ pub fn render_layers(ctx: &Context, scene: &hfgi::scene::model::Scene) -> hfgi::
         Ok(())
     })
     .unwrap();
-    let layers = r.read_layers(ctx).unwrap();
+    let out = read(ctx, &r);
     r.destroy(ctx);
-    layers
+    out
 }
