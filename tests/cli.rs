@@ -206,3 +206,31 @@ fn bench_writes_csv_markdown_and_plots() {
     let png = image::open(out.join("pareto-default.png")).unwrap();
     assert!(png.width() >= 400);
 }
+
+/// Output paths are checked before any work (no device is opened: the `device:` line is never
+/// printed) and a rejected command changes nothing (docs/robustness.md, "atomic, checked outputs").
+#[test]
+fn outputs_that_cannot_work_are_rejected_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    let heights = dir.path().join("h.f32");
+    std::fs::write(&heights, vec![0u8; 4 * 4 * 4]).unwrap();
+    let text = "[heightfield]\nfile = \"h.f32\"\nraw_size = [4, 4]\n";
+    std::fs::write(&scene, text).unwrap();
+    let s = scene.to_str().unwrap();
+    // The scene file itself, the height file it reads, and a directory as the output.
+    for (args, what) in [
+        (vec!["render", s, "--out", s], "scene.toml"),
+        (vec!["render", s, "--shading-exr", heights.to_str().unwrap()], "h.f32"),
+        (vec!["reference", s, "--shading-exr", dir.path().to_str().unwrap()], "not a directory"),
+        (vec!["render", s, "--shading-png", "/tmp/../tmp/x.png", "--indirect-png", "/tmp/x.png"], "x.png"),
+    ] {
+        let (ok, msg) = hfgi(&args);
+        assert!(!ok && msg.contains(what) && !msg.contains("device:") && !msg.contains("panicked"), "{args:?}: {msg}");
+    }
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), text);
+    assert_eq!(std::fs::read(&heights).unwrap(), vec![0u8; 64]);
+    let mut left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    left.sort();
+    assert_eq!(left, ["h.f32", "scene.toml"], "nothing else is left in the folder");
+}

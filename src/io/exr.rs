@@ -91,9 +91,11 @@ pub fn write_layers(path: &Path, width: usize, height: usize, layers: &[Layer<'_
         AnyChannels::sort(list),
     );
     let image = Image::from_layer(layer);
-    catch_unwind(AssertUnwindSafe(|| image.write().to_file(path)))
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    catch_unwind(AssertUnwindSafe(|| image.write().to_buffered(&mut bytes)))
         .map_err(|_| Error::format(path, "EXR encoder panicked"))?
-        .map_err(|e| exr_error(path, e, "writing EXR failed"))
+        .map_err(|e| exr_error(path, e, "writing EXR failed"))?;
+    super::atomic::write_bytes(path, bytes.get_ref())
 }
 
 /// Writes RGB layers: each `(name, pixels)` gives channels `R`, `G`, `B` of layer `name`

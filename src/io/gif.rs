@@ -1,7 +1,5 @@
 //! Animated GIF output (the `image` crate's `gif` feature): tone-mapped frames, looping forever.
 
-use std::fs::File;
-use std::io::BufWriter;
 use std::path::Path;
 
 use image::codecs::gif::{GifEncoder, Repeat};
@@ -43,8 +41,8 @@ pub fn write_gif(path: &Path, width: usize, height: usize, frames: &[Vec<u8>], f
         return Err(Error::param("GIF frames", 0, "at least one frame"));
     }
     let (w, h) = crate::scene::load::dims_u32(path, width, height)?;
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut enc = GifEncoder::new_with_speed(BufWriter::new(file), 10);
+    let mut bytes = Vec::new();
+    let mut enc = GifEncoder::new_with_speed(&mut bytes, 10);
     let fail = |e: image::ImageError| Error::format(path, format!("GIF encoding failed: {e}"));
     enc.set_repeat(Repeat::Infinite).map_err(fail)?;
     let delay = Delay::from_numer_denom_ms((1.0e6 / fps).round() as u32, 1000);
@@ -60,5 +58,6 @@ pub fn write_gif(path: &Path, width: usize, height: usize, frames: &[Vec<u8>], f
             .ok_or_else(|| Error::format(path, format!("frame {i}: buffer does not match {width}×{height}")))?;
         enc.encode_frame(Frame::from_parts(img, 0, 0, delay)).map_err(fail)?;
     }
-    Ok(())
+    drop(enc);
+    crate::io::atomic::write_bytes(path, &bytes)
 }

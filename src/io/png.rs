@@ -2,8 +2,6 @@
 //!
 //! Image row 0 is data row `j = 0` (the top of the image is the first row).
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use image::codecs::png::PngEncoder;
@@ -96,11 +94,10 @@ fn check_len(path: &Path, width: usize, height: usize, len: usize) -> Result<()>
 
 fn write_png(path: &Path, width: usize, height: usize, buf: &[u8], color: ExtendedColorType) -> Result<()> {
     let (w, h) = dims_u32(path, width, height)?;
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut out = BufWriter::new(file);
+    let mut out = Vec::new();
     PngEncoder::new(&mut out).write_image(buf, w, h, color).map_err(|e| match e {
         image::ImageError::IoError(io) => Error::io(path, io),
         other => Error::format(path, format!("PNG encoding failed: {other}")),
     })?;
-    out.flush().map_err(|e| Error::io(path, e))
+    super::atomic::write_bytes(path, &out)
 }

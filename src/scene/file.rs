@@ -90,6 +90,29 @@ pub fn load_scene(path: &Path, overrides: &[String]) -> Result<Scene> {
     parse_scene(&text, &base, &path.display().to_string(), overrides)
 }
 
+/// The files a scene reads besides itself — `heightfield.file`, `material.albedo_map`,
+/// `environment.map`, from the file or from `key=value` overrides — resolved against the scene
+/// file's folder, and the scene file itself: the inputs an output must not overwrite
+/// ([`crate::io::atomic::check_outputs`]). Text that does not parse yields only what could be
+/// read (loading the scene reports the error).
+pub fn input_files(path: Option<&Path>, overrides: &[String]) -> Vec<PathBuf> {
+    const KEYS: [(&str, &str); 3] = [("heightfield", "file"), ("material", "albedo_map"), ("environment", "map")];
+    let base = path.and_then(Path::parent).map(Path::to_path_buf).unwrap_or_default();
+    let mut out: Vec<PathBuf> = path.map(Path::to_path_buf).into_iter().collect();
+    let doc = path.and_then(|p| std::fs::read_to_string(p).ok()).and_then(|t| t.parse::<Table>().ok());
+    for (table, key) in KEYS {
+        if let Some(v) = doc.as_ref().and_then(|d| d.get(table)?.get(key)?.as_str().map(str::to_string)) {
+            out.push(base.join(v));
+        }
+        for o in overrides {
+            if let Some(v) = o.strip_prefix(&format!("{table}.{key}=")) {
+                out.push(base.join(v.trim().trim_matches('"')));
+            }
+        }
+    }
+    out
+}
+
 /// Parses scene-file text into a validated [`Scene`].
 ///
 /// - `base_dir`: folder against which relative `heightfield.file`, `material.albedo_map` and

@@ -16,7 +16,7 @@
 //! Sizes are checked against `[2, max_dim]` before pixel memory is allocated.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Cursor, Write};
+use std::io::{BufReader, Cursor};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
@@ -273,12 +273,8 @@ fn load_raw(path: &Path, opts: &LoadOptions) -> Result<HeightField> {
 /// Writes `field` as headerless little-endian f32, row-major (readable with
 /// `raw_size = Some((width, height))`).
 pub fn save_raw(field: &HeightField, path: &Path) -> Result<()> {
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut out = BufWriter::new(file);
-    for v in field.data() {
-        out.write_all(&v.to_le_bytes()).map_err(|e| Error::io(path, e))?;
-    }
-    out.flush().map_err(|e| Error::io(path, e))
+    let bytes: Vec<u8> = field.data().iter().flat_map(|v| v.to_le_bytes()).collect();
+    crate::io::atomic::write_bytes(path, &bytes)
 }
 
 /// Writes `field` as a 16-bit grayscale PNG, mapping `min..max` linearly to `0..65535`
@@ -298,12 +294,11 @@ pub fn save_png16(field: &HeightField, path: &Path) -> Result<(f32, f32)> {
         buf.extend_from_slice(&q.to_ne_bytes());
     }
     let (w, h) = dims_u32(path, field.width(), field.height())?;
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut out = BufWriter::new(file);
+    let mut out = Vec::new();
     PngEncoder::new(&mut out)
         .write_image(&buf, w, h, ExtendedColorType::L16)
         .map_err(|e| Error::format(path, format!("PNG encoding failed: {e}")))?;
-    out.flush().map_err(|e| Error::io(path, e))?;
+    crate::io::atomic::write_bytes(path, &out)?;
     Ok((lo, hi))
 }
 

@@ -453,7 +453,7 @@ fn write_outputs(
         );
     }
     let csv_path = a.out.join("results.csv");
-    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    hfgi::io::atomic::write_bytes(&csv_path, csv.as_bytes())?;
 
     // Markdown: per scene, the table; the reference times; the m × k grid.
     let mut md = String::new();
@@ -558,7 +558,7 @@ fn write_outputs(
         let _ = writeln!(md, "\n![{scene}: error against time](pareto-{scene}.png)\n");
     }
     let md_path = a.out.join("results.md");
-    std::fs::write(&md_path, md).with_context(|| format!("writing {}", md_path.display()))?;
+    hfgi::io::atomic::write_bytes(&md_path, md.as_bytes())?;
     eprintln!("wrote {}, {} and the plots", csv_path.display(), md_path.display());
     Ok(())
 }

@@ -56,9 +56,9 @@ pub fn export(a: ExportArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let hp = a.out.join("heights.f32");
-    std::fs::write(&hp, heights).with_context(|| format!("writing {}", hp.display()))?;
+    hfgi::io::atomic::write_bytes(&hp, &heights)?;
     let sp = a.out.join("scene.toml");
-    std::fs::write(&sp, t).with_context(|| format!("writing {}", sp.display()))?;
+    hfgi::io::atomic::write_bytes(&sp, t.as_bytes())?;
     eprintln!("wrote {} ({w}×{h} float32) and {}", hp.display(), sp.display());
     Ok(())
 }

@@ -254,6 +254,11 @@ pub(crate) fn load_scene_or_default(path: Option<&Path>, overrides: &[String]) -
 
 fn render(a: RenderArgs) -> Result<()> {
     let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
+    let outputs: Vec<&Path> = std::iter::once(&a.out)
+        .chain([&a.view_exr, &a.shading_exr, &a.shading_png, &a.indirect_png, &a.heights_png].into_iter().flatten())
+        .map(PathBuf::as_path)
+        .collect();
+    check_outputs(&outputs, a.scene.as_deref(), &a.overrides)?;
     let ctx = context(&a.device)?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let max = ctx.info().max_image_dimension_2d as usize;
@@ -304,43 +309,51 @@ fn render(a: RenderArgs) -> Result<()> {
     }
     let exposure = a.exposure.unwrap_or(scene.camera.exposure);
     let (vw, vh) = (vw as usize, vh as usize);
-    hfgi::io::png::write_tonemapped(&a.out, vw, vh, &image, exposure)?;
-    eprintln!("wrote {}", a.out.display());
-    if let Some(path) = &a.view_exr {
-        hfgi::io::exr::write_rgb_layers(path, vw, vh, &[("", &image)])?;
-        eprintln!("wrote {}", path.display());
-    }
-    if let Some(path) = &a.shading_png {
-        hfgi::io::png::write_tonemapped(path, w, h, &layers.total, exposure)?;
-        eprintln!("wrote {}", path.display());
-    }
-    if let Some(path) = &a.indirect_png {
-        let ind: Vec<[f32; 3]> = layers
-            .indirect
-            .iter()
-            .zip(&layers.indirect_glossy)
-            .map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]])
-            .collect();
-        hfgi::io::png::write_tonemapped(path, w, h, &ind, exposure)?;
-        eprintln!("wrote {}", path.display());
-    }
-    if let Some(path) = &a.heights_png {
-        hfgi::io::png::write_gray_normalized(path, w, h, scene.field.data())?;
-        eprintln!("wrote {}", path.display());
-    }
-    if let Some(path) = &a.shading_exr {
-        hfgi::io::exr::write_rgb_layers(
-            path,
-            w,
-            h,
-            &[
-                ("", &layers.total),
-                ("direct", &layers.direct),
-                ("indirect", &layers.indirect),
-                ("glossy", &layers.glossy),
-            ],
-        )?;
-        eprintln!("wrote {}", path.display());
+    // Every output or none (docs/robustness.md).
+    let mut wrote = Vec::new();
+    hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
+        hfgi::io::png::write_tonemapped(&a.out, vw, vh, &image, exposure)?;
+        wrote.push(a.out.display().to_string());
+        if let Some(path) = &a.view_exr {
+            hfgi::io::exr::write_rgb_layers(path, vw, vh, &[("", &image)])?;
+            wrote.push(path.display().to_string());
+        }
+        if let Some(path) = &a.shading_png {
+            hfgi::io::png::write_tonemapped(path, w, h, &layers.total, exposure)?;
+            wrote.push(path.display().to_string());
+        }
+        if let Some(path) = &a.indirect_png {
+            let ind: Vec<[f32; 3]> = layers
+                .indirect
+                .iter()
+                .zip(&layers.indirect_glossy)
+                .map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]])
+                .collect();
+            hfgi::io::png::write_tonemapped(path, w, h, &ind, exposure)?;
+            wrote.push(path.display().to_string());
+        }
+        if let Some(path) = &a.heights_png {
+            hfgi::io::png::write_gray_normalized(path, w, h, scene.field.data())?;
+            wrote.push(path.display().to_string());
+        }
+        if let Some(path) = &a.shading_exr {
+            hfgi::io::exr::write_rgb_layers(
+                path,
+                w,
+                h,
+                &[
+                    ("", &layers.total),
+                    ("direct", &layers.direct),
+                    ("indirect", &layers.indirect),
+                    ("glossy", &layers.glossy),
+                ],
+            )?;
+            wrote.push(path.display().to_string());
+        }
+        Ok(())
+    })?;
+    for p in wrote {
+        eprintln!("wrote {p}");
     }
     Ok(())
 }
@@ -405,6 +418,12 @@ fn animate(a: AnimateArgs) -> Result<()> {
     }
     let scene = hfgi::scene::file::load_scene(&a.scene, &a.overrides)
         .with_context(|| format!("loading scene {}", a.scene.display()))?;
+    let first = a.out.join("frame_0000.png");
+    check_outputs(
+        &std::iter::once(&first).chain(&a.gif).map(PathBuf::as_path).collect::<Vec<_>>(),
+        Some(&a.scene),
+        &a.overrides,
+    )?;
     if scene.animation == Animation::None {
         bail!(
             "{}: the scene does not move ([animation] kind = \"none\"); add an [animation] table \
@@ -700,14 +719,22 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
+/// Rejects output paths that cannot work (a directory, an input of the scene, the same file
+/// twice, a folder that cannot be written) before any work; creates missing folders.
+pub fn check_outputs(outputs: &[&Path], scene: Option<&Path>, overrides: &[String]) -> Result<()> {
+    let inputs = hfgi::scene::file::input_files(scene, overrides);
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    hfgi::io::atomic::check_outputs(outputs, &inputs)?;
+    Ok(())
+}
+
 fn spirv(out: &Path) -> Result<()> {
     for s in hfgi::shaders::ALL {
         let path = out.join(format!("{}.spv", s.name));
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
-        std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(s.words))
-            .with_context(|| format!("writing {}", path.display()))?;
+        hfgi::io::atomic::write_bytes(&path, bytemuck::cast_slice::<u32, u8>(s.words))?;
         println!("{}", path.display());
     }
     Ok(())

@@ -642,7 +642,9 @@ fn draw(
         root.present().map_err(plot_err)?;
     }
     let img = image::RgbImage::from_raw(WIDTH, HEIGHT, buf).ok_or_else(|| anyhow!("plot buffer has the wrong size"))?;
-    img.save_with_format(path, image::ImageFormat::Png).with_context(|| format!("writing {}", path.display()))?;
+    let mut png = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png, image::ImageFormat::Png).with_context(|| format!("encoding {}", path.display()))?;
+    hfgi::io::atomic::write_bytes(path, png.get_ref())?;
     Ok(())
 }
 

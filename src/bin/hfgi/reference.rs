@@ -1,6 +1,6 @@
 //! `hfgi reference`: the brute-force ground truth (docs/accuracy.md §1).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
 use clap::Args;
@@ -63,6 +63,8 @@ fn progress_bar(what: &str) -> indicatif::ProgressBar {
 
 pub fn reference(a: ReferenceArgs) -> Result<()> {
     let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
+    let outputs: Vec<&Path> = std::iter::once(&a.shading_exr).chain(&a.shading_png).map(PathBuf::as_path).collect();
+    super::check_outputs(&outputs, a.scene.as_deref(), &a.overrides)?;
     let settings = TruthSettings {
         azimuths: a.azimuths,
         step: a.step,
@@ -109,15 +111,20 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
     if let Some(dir) = a.shading_exr.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    hfgi::io::exr::write_rgb_layers(
-        &a.shading_exr,
-        w,
-        h,
-        &[("", &total), ("direct", &direct), ("indirect", &indirect), ("glossy", &glossy)],
-    )?;
-    eprintln!("wrote {}", a.shading_exr.display());
-    if let Some(p) = &a.shading_png {
-        hfgi::io::png::write_tonemapped(p, w, h, &total, a.exposure.unwrap_or(scene.camera.exposure))?;
+    // Both outputs or neither (docs/robustness.md).
+    hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
+        hfgi::io::exr::write_rgb_layers(
+            &a.shading_exr,
+            w,
+            h,
+            &[("", &total), ("direct", &direct), ("indirect", &indirect), ("glossy", &glossy)],
+        )?;
+        if let Some(p) = &a.shading_png {
+            hfgi::io::png::write_tonemapped(p, w, h, &total, a.exposure.unwrap_or(scene.camera.exposure))?;
+        }
+        Ok(())
+    })?;
+    for p in std::iter::once(&a.shading_exr).chain(&a.shading_png) {
         eprintln!("wrote {}", p.display());
     }
     Ok(())
