@@ -224,6 +224,8 @@ fn outputs_that_cannot_work_are_rejected_before_any_work() {
         (vec!["render", s, "--shading-exr", heights.to_str().unwrap()], "h.f32"),
         (vec!["reference", s, "--shading-exr", dir.path().to_str().unwrap()], "not a directory"),
         (vec!["render", s, "--shading-png", "/tmp/../tmp/x.png", "--indirect-png", "/tmp/x.png"], "x.png"),
+        // `export` into the scene's own folder would overwrite the scene with its export.
+        (vec!["export", s, "--out", dir.path().to_str().unwrap()], "scene.toml"),
     ] {
         let (ok, msg) = hfgi(&args);
         assert!(!ok && msg.contains(what) && !msg.contains("device:") && !msg.contains("panicked"), "{args:?}: {msg}");

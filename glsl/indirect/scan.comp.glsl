@@ -63,10 +63,6 @@ vec3 normal_at(vec2 q, bool wrap) {
     return normalize(vec3(-g, 1.0));
 }
 
-// Exit radiance of casting point q toward the receiver (docs/indirect.md §2): the diffuse RGB
-// pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
-// direction back to the receiver about q's normal.
-// With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image.
 // The RGB radiance of level lv at level-0 position q: the three channels' planes share their
 // texel addresses, so they are computed once and each channel reads its four corners at its own
 // plane (the same values and arithmetic as hfgi_pyramid_at per channel). Pyramid mode (no stack,
@@ -108,6 +104,10 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
     return rad;
 }
 
+// Exit radiance of casting point q toward the receiver (docs/indirect.md §2): the diffuse RGB
+// pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
+// direction back to the receiver about q's normal.
+// With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image.
 vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stack_mode, bool wrap, bool raw0) {
     bool raw = raw0 && lv == 0u;
     hfgi_Level r0 = hfgi_radiance_table[0];

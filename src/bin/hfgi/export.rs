@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use clap::Args;
 use hfgi::scene::model::Albedo;
 
@@ -54,11 +54,14 @@ pub fn export(a: ExportArgs) -> Result<()> {
         writeln!(t, "\n[[key_light]]\ndirection = {}", rgb(d.to_array()))?;
         writeln!(t, "angular_radius = {:e}\nradiance = {}", l.angular_radius, rgb(l.radiance))?;
     }
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let hp = a.out.join("heights.f32");
-    hfgi::io::atomic::write_bytes(&hp, &heights)?;
-    let sp = a.out.join("scene.toml");
-    hfgi::io::atomic::write_bytes(&sp, t.as_bytes())?;
+    let (hp, sp) = (a.out.join("heights.f32"), a.out.join("scene.toml"));
+    super::check_outputs(&[hp.as_path(), sp.as_path()], a.scene.as_deref(), &a.overrides)?;
+    // Both files or neither (docs/robustness.md).
+    hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
+        hfgi::io::atomic::write_bytes(&hp, &heights)?;
+        hfgi::io::atomic::write_bytes(&sp, t.as_bytes())?;
+        Ok(())
+    })?;
     eprintln!("wrote {} ({w}×{h} float32) and {}", hp.display(), sp.display());
     Ok(())
 }

@@ -619,6 +619,9 @@ fn load_field(a: &PyramidArgs, max_dim: u32) -> Result<HeightField> {
 
 fn pyramid(a: PyramidArgs) -> Result<()> {
     let mode: PyramidMode = a.pyramid.parse().context("--pyramid")?;
+    let files = ["heights.png", "heights.exr", "pyramid.exr", "pyramid.png"].map(|n| a.out.join(n));
+    let inputs: Vec<&Path> = a.heights.iter().map(PathBuf::as_path).collect();
+    hfgi::io::atomic::check_outputs(&files.iter().map(PathBuf::as_path).collect::<Vec<_>>(), &inputs)?;
     let ctx = context(&a.device)?;
     let field = load_field(&a, ctx.info().max_image_dimension_2d)?;
     let (w, h) = (field.width(), field.height());
@@ -637,33 +640,38 @@ fn pyramid(a: PyramidArgs) -> Result<()> {
     print_timings(&ctx, &timer);
     eprintln!("  pyramid memory: {:.2} MiB ({} levels)", pyr.memory_bytes() as f64 / 1048576.0, pyr.layout().count());
 
-    hfgi::io::png::write_gray_normalized(&a.out.join("heights.png"), w, h, field.data())?;
-    hfgi::io::exr::write_scalar(&a.out.join("heights.exr"), w, h, "height", field.data())?;
+    // The four files together or none (docs/robustness.md).
+    let written = hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
+        hfgi::io::png::write_gray_normalized(&a.out.join("heights.png"), w, h, field.data())?;
+        hfgi::io::exr::write_scalar(&a.out.join("heights.exr"), w, h, "height", field.data())?;
 
-    // Levels, each B-spline resampled to full resolution (the stack, or the same filter on the fly).
-    let count = pyr.layout().count();
-    let mut planes = Vec::with_capacity(count);
-    for i in 0..count {
-        let plane = match mode {
-            PyramidMode::Stack => pyr.read_stack(&ctx, i)?,
-            PyramidMode::Pyramid => {
-                let q: Vec<[f32; 3]> = (0..w * h).map(|k| [i as f32, (k % w) as f32, (k / w) as f32]).collect();
-                pyr.probe(&ctx, &q)?
-            }
-        };
-        planes.push(plane);
-    }
-    let names: Vec<String> = (0..count).map(|i| format!("level_{i:02}")).collect();
-    let layers: Vec<hfgi::io::exr::Layer> = planes
-        .iter()
-        .zip(&names)
-        .map(|(p, n)| hfgi::io::exr::Layer { name: n.as_str(), channels: vec![("height", p.as_slice())] })
-        .collect();
-    hfgi::io::exr::write_layers(&a.out.join("pyramid.exr"), w, h, &layers)?;
-    let sheet = contact_sheet(&planes, w, h, field.range());
-    hfgi::io::png::write_tonemapped(&a.out.join("pyramid.png"), sheet.1, sheet.2, &sheet.0, 0.0)?;
+        // Levels, each B-spline resampled to full resolution (the stack, or the same filter on the fly).
+        let count = pyr.layout().count();
+        let mut planes = Vec::with_capacity(count);
+        for i in 0..count {
+            let plane = match mode {
+                PyramidMode::Stack => pyr.read_stack(&ctx, i)?,
+                PyramidMode::Pyramid => {
+                    let q: Vec<[f32; 3]> = (0..w * h).map(|k| [i as f32, (k % w) as f32, (k / w) as f32]).collect();
+                    pyr.probe(&ctx, &q)?
+                }
+            };
+            planes.push(plane);
+        }
+        let names: Vec<String> = (0..count).map(|i| format!("level_{i:02}")).collect();
+        let layers: Vec<hfgi::io::exr::Layer> = planes
+            .iter()
+            .zip(&names)
+            .map(|(p, n)| hfgi::io::exr::Layer { name: n.as_str(), channels: vec![("height", p.as_slice())] })
+            .collect();
+        hfgi::io::exr::write_layers(&a.out.join("pyramid.exr"), w, h, &layers)?;
+        let sheet = contact_sheet(&planes, w, h, field.range());
+        hfgi::io::png::write_tonemapped(&a.out.join("pyramid.png"), sheet.1, sheet.2, &sheet.0, 0.0)?;
+        Ok(())
+    });
     pyr.destroy(&ctx);
     timer.destroy(&ctx);
+    written?;
     ctx.check_validation()?;
     eprintln!("wrote {}/{{heights.png, heights.exr, pyramid.png, pyramid.exr}}", a.out.display());
     Ok(())
