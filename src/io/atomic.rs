@@ -108,7 +108,6 @@ pub fn all_or_nothing<T, E: From<Error>>(f: impl FnOnce() -> std::result::Result
     let mut scope = Scope { outer, committed: false };
     let value = f()?;
     let mine = STAGED.with(|s| s.borrow_mut().take()).unwrap_or_default();
-    STAGED.with(|s| *s.borrow_mut() = Some(Vec::new())); // the guard restores the outer list
     if nested {
         scope.outer.get_or_insert_with(Vec::new).extend(mine);
         scope.committed = true;

@@ -304,9 +304,6 @@ fn render(a: RenderArgs) -> Result<()> {
     timer.destroy(&ctx);
     let (layers, image) = read?;
     ctx.check_validation()?;
-    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
     let exposure = a.exposure.unwrap_or(scene.camera.exposure);
     let (vw, vh) = (vw as usize, vh as usize);
     // Every output or none (docs/robustness.md).
@@ -441,7 +438,6 @@ fn animate(a: AnimateArgs) -> Result<()> {
     if w > max || h > max {
         bail!("height field {w}×{h} exceeds this device's maxImageDimension2D {max}");
     }
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     eprintln!(
         "device: {} ({}); field {w}×{h}; animation {}; {} frames",
         ctx.info().name,
@@ -579,9 +575,6 @@ fn animate(a: AnimateArgs) -> Result<()> {
     if let (Some(path), Some((fw, fh, _))) = (&a.gif, gif_frames.first()) {
         let (fw, fh) = (*fw, *fh);
         let frames: Vec<Vec<u8>> = gif_frames.into_iter().map(|(_, _, f)| f).collect();
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        }
         hfgi::io::gif::write_gif(path, fw, fh, &frames, a.fps)?;
         eprintln!("wrote {} ({} fps)", path.display(), a.fps);
     }
@@ -619,13 +612,16 @@ fn load_field(a: &PyramidArgs, max_dim: u32) -> Result<HeightField> {
 
 fn pyramid(a: PyramidArgs) -> Result<()> {
     let mode: PyramidMode = a.pyramid.parse().context("--pyramid")?;
-    let files = ["heights.png", "heights.exr", "pyramid.exr", "pyramid.png"].map(|n| a.out.join(n));
+    let [heights_png, heights_exr, pyramid_exr, pyramid_png] =
+        ["heights.png", "heights.exr", "pyramid.exr", "pyramid.png"].map(|n| a.out.join(n));
     let inputs: Vec<&Path> = a.heights.iter().map(PathBuf::as_path).collect();
-    hfgi::io::atomic::check_outputs(&files.iter().map(PathBuf::as_path).collect::<Vec<_>>(), &inputs)?;
+    hfgi::io::atomic::check_outputs(
+        &[&heights_png, &heights_exr, &pyramid_exr, &pyramid_png].map(PathBuf::as_path),
+        &inputs,
+    )?;
     let ctx = context(&a.device)?;
     let field = load_field(&a, ctx.info().max_image_dimension_2d)?;
     let (w, h) = (field.width(), field.height());
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     eprintln!("device: {} ({}), field {w}×{h}, k_v = {}, {mode}", ctx.info().name, ctx.info().driver, a.level_step);
 
     let pyr =
@@ -642,8 +638,8 @@ fn pyramid(a: PyramidArgs) -> Result<()> {
 
     // The four files together or none (docs/robustness.md).
     let written = hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
-        hfgi::io::png::write_gray_normalized(&a.out.join("heights.png"), w, h, field.data())?;
-        hfgi::io::exr::write_scalar(&a.out.join("heights.exr"), w, h, "height", field.data())?;
+        hfgi::io::png::write_gray_normalized(&heights_png, w, h, field.data())?;
+        hfgi::io::exr::write_scalar(&heights_exr, w, h, "height", field.data())?;
 
         // Levels, each B-spline resampled to full resolution (the stack, or the same filter on the fly).
         let count = pyr.layout().count();
@@ -664,9 +660,9 @@ fn pyramid(a: PyramidArgs) -> Result<()> {
             .zip(&names)
             .map(|(p, n)| hfgi::io::exr::Layer { name: n.as_str(), channels: vec![("height", p.as_slice())] })
             .collect();
-        hfgi::io::exr::write_layers(&a.out.join("pyramid.exr"), w, h, &layers)?;
+        hfgi::io::exr::write_layers(&pyramid_exr, w, h, &layers)?;
         let sheet = contact_sheet(&planes, w, h, field.range());
-        hfgi::io::png::write_tonemapped(&a.out.join("pyramid.png"), sheet.1, sheet.2, &sheet.0, 0.0)?;
+        hfgi::io::png::write_tonemapped(&pyramid_png, sheet.1, sheet.2, &sheet.0, 0.0)?;
         Ok(())
     });
     pyr.destroy(&ctx);

@@ -108,9 +108,6 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
     let f32s = |v: &[[f64; 3]]| v.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect::<Vec<_>>();
     let (total, direct, indirect) = (f32s(&out.total), f32s(&out.direct), f32s(&out.indirect));
     let glossy = vec![[0f32; 3]; w * h];
-    if let Some(dir) = a.shading_exr.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
     // Both outputs or neither (docs/robustness.md).
     hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
         hfgi::io::exr::write_rgb_layers(
