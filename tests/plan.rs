@@ -13,6 +13,7 @@ use hfgi::vk::{Context, Recorder, StageTimer};
 
 const PD: &str = "pyramid.decimate";
 const PS: &str = "pyramid.synthesize";
+const PM: &str = "pyramid.max";
 const VE: &str = "visibility.environment";
 const VK: &str = "visibility.key_lights";
 const SD: &str = "shade.direct";
@@ -196,6 +197,24 @@ fn synthesize_stages_only_in_stack_mode() {
     let p = &check_frames(&ctx, "pyramid", &s, &[], &[frame_stages(&[PD, VE, VK], true, 1, false)])[0];
     assert!(omitted(p, PS).contains("pyramid mode"), "{p}");
     assert!(omitted(p, RS).contains("pyramid mode"), "{p}");
+    // The max pyramid only where the scan uses it: with radial probes (in either bounce
+    // setting), a bilinear level 0 and no wrap.
+    s.gi.pyramid = PyramidMode::Stack;
+    let p = plan(&s, &FrameState::first());
+    assert!(omitted(&p, PM).contains("no radial probes"), "{p}");
+    s.gi.radial_probes_later = 1;
+    let p = &check_frames(&ctx, "probes", &s, &[], &[frame_stages(&[PD, PS, PM, VE, VK], true, 1, true)])[0];
+    assert!(reason(p, PM).contains("level-0 maxima"), "{p}");
+    assert!(pass_created(p, "MaxPyramid").0);
+    s.gi.level0 = hfgi::scene::model::Level0::Bspline;
+    let p =
+        &check_frames(&ctx, "probes, bspline level 0", &s, &[], &[frame_stages(&[PD, PS, VE, VK], true, 1, true)])[0];
+    assert!(omitted(p, PM).contains("bspline"), "{p}");
+    assert!(!pass_created(p, "MaxPyramid").0);
+    s.gi.level0 = hfgi::scene::model::Level0::Bilinear;
+    s.wrap = true;
+    let p = &check_frames(&ctx, "probes, wrap", &s, &[], &[frame_stages(&[PD, PS, VE, VK], true, 1, true)])[0];
+    assert!(omitted(p, PM).contains("periodic"), "{p}");
 }
 
 #[test]
@@ -237,11 +256,13 @@ fn plan_is_pure_and_lists_every_pass() {
     // No GPU: the plan of a scene is a function of the scene and the frame state.
     let mut s = base();
     s.gi.bounces = 3;
+    s.gi.radial_probes = 1;
     let p = plan(&s, &FrameState::first());
-    assert_eq!(p.names(), frame_stages(&[PD, PS, VE, VK], true, 3, true));
+    assert_eq!(p.names(), frame_stages(&[PD, PS, PM, VE, VK], true, 3, true));
     assert_eq!(p, plan(&s, &FrameState::static_scene(0)));
     let names: Vec<&str> = p.passes().iter().map(|x| x.name).collect();
-    assert_eq!(names, ["HeightPyramid", "VisibilityPass", "ShadePass", "IndirectPass", "RadiancePyramid"]);
+    let all = ["HeightPyramid", "VisibilityPass", "ShadePass", "IndirectPass", "MaxPyramid", "RadiancePyramid"];
+    assert_eq!(names, all);
     assert!(p.passes().iter().all(|x| x.created && !x.reason.is_empty()));
     let text = format!("{}{p}", p.passes_text());
     for line in ["pyramid.decimate", "gi.bounces = 3, bounce 3 of 3", "IndirectPass", "created"] {

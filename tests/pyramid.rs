@@ -134,3 +134,45 @@ fn stage_timer_names_the_pyramid_stages() {
     timer.destroy(&ctx);
     pyr.destroy(&ctx);
 }
+
+/// Stage `pyramid.max` against its CPU twin (`reference::max::build`), exactly (maxima of the
+/// same f32 values): a non-square field of thin spikes on ground below zero, recorded by the
+/// renderer of a scene with indirect light; and the renderer leaves the stage (and the pass)
+/// out on a periodic field.
+#[test]
+fn max_pyramid_equals_its_twin_exactly() {
+    use hfgi::scene::generators::Generator;
+    let ctx = gpu();
+    let mut field = Generator::Spikes { seed: 3, count: 40, height: 0.2 }.generate(77, 50).unwrap();
+    let data: Vec<f32> = field.data().iter().map(|h| h - 30.0).collect();
+    field = hfgi::scene::HeightField::new("spikes below zero", 77, 50, data, 4096).unwrap();
+    let mut scene = common::scenes::scene(field.clone());
+    scene.gi.azimuths = 8;
+    scene.gi.bounces = 1;
+    scene.gi.radial_probes = 2;
+    let mut r = hfgi::frame::Renderer::new(&ctx, &scene).unwrap();
+    let stages = ctx
+        .submit_and_wait(|cmd| {
+            let mut rec = Recorder::new(&ctx, cmd, None);
+            r.record(&mut rec);
+            Ok(rec.stages().to_vec())
+        })
+        .unwrap();
+    assert!(stages.iter().any(|s| s == "pyramid.max"), "{stages:?}");
+    let max = r.indirect.as_ref().and_then(|i| i.max.as_ref()).expect("the scene uses the bound");
+    let gpu_data = max.read(&ctx).unwrap();
+    let z0 = r.height_origin();
+    let rel: Vec<f32> = field.data().iter().map(|h| h - z0).collect();
+    let (layout, cpu) = hfgi::reference::max::build(&rel, 77, 50);
+    assert_eq!(max.layout(), &layout);
+    assert_eq!(gpu_data.len(), cpu.len());
+    let differ = gpu_data.iter().zip(&cpu).filter(|(a, b)| a != b).count();
+    assert_eq!(differ, 0, "{differ} of {} values differ", cpu.len());
+    r.destroy(&ctx);
+
+    scene.wrap = true;
+    let r = hfgi::frame::Renderer::new(&ctx, &scene).unwrap();
+    assert!(r.indirect.as_ref().is_some_and(|i| i.max.is_none()), "no max pyramid with wrap");
+    assert!(!r.plan_next().names().contains(&"pyramid.max"));
+    r.destroy(&ctx);
+}

@@ -24,6 +24,7 @@ const uint HFGI_FLAG_RAW_LEVEL0 = 1u; // level 0 is the bilinear surface itself,
 const uint HFGI_FLAG_HORIZON_SAMPLES = 2u; // ω_max = largest sample, not eq. 17's spline maximum
 const uint HFGI_FLAG_TANGENT = 4u; // ω_min = the exact tangent elevation, not −asin(N·d)
 const uint HFGI_FLAG_ACCUMULATE = 8u; // add to the output (a later azimuth chunk of the same set)
+const uint HFGI_FLAG_MAX_BOUND = 16u; // the indirect scan skips what the max pyramid rules out
 
 // Value of table entry `plane` (level `l`, of a pyramid whose level 0 is `base`) at level-0
 // position p0. `raw`: the unfiltered level as a bilinear surface (gi.level0 = "bilinear"; only
@@ -111,17 +112,26 @@ float hfgi_scan_base(hfgi_Scan s, uint level) {
     return hfgi_height_at(s, level, s.p);
 }
 
-// Sample i of n_v along direction d: t_i = N·2^(−(n_v−1−i)/k) texels (i < 0: inside the first
-// texel; i ≥ n_v: past N, toward the far corner), q = p + t_i·d, level hfgi_scan_level, and the
-// slope tan ω_i = Δh / t_i of eq. 15 against `base` (the receiver at that level): a scan compares
-// slopes and takes the atan only where a sample matters. False once q has left the domain (no
-// wrap), with a 1e-3 texel tolerance so that rays along the border do not depend on rounding
-// (docs/direct.md §2).
+// Step t_i = N·2^(−(n_v−1−i)/k) texels of sample i of n_v (eq. 14; i < 0: inside the first
+// texel; i ≥ n_v: past N, toward the far corner).
+float hfgi_scan_t(hfgi_Scan s, int i, int n_v) {
+    return max(s.n0.x, s.n0.y) * exp2(-float(n_v - 1 - i) / float(s.level_step));
+}
+
+// Whether level-0 position q is still in the domain (always with wrap), with a 1e-3 texel
+// tolerance so that rays along the border do not depend on rounding (docs/direct.md §2).
+bool hfgi_scan_inside(hfgi_Scan s, vec2 q) {
+    return s.wrap || !(q.x < -1e-3 || q.y < -1e-3 || q.x > s.n0.x - 1.0 + 1e-3 || q.y > s.n0.y - 1.0 + 1e-3);
+}
+
+// Sample i of n_v along direction d: q = p + t_i·d, level hfgi_scan_level, and the slope
+// tan ω_i = Δh / t_i of eq. 15 against `base` (the receiver at that level): a scan compares
+// slopes and takes the atan only where a sample matters. False once q has left the domain.
 bool hfgi_scan_slope(hfgi_Scan s, int i, int n_v, vec2 d, float base, out vec2 q, out float slope) {
-    float t = max(s.n0.x, s.n0.y) * exp2(-float(n_v - 1 - i) / float(s.level_step));
+    float t = hfgi_scan_t(s, i, n_v);
     q = s.p + t * d;
     slope = 0.0;
-    if (!s.wrap && (q.x < -1e-3 || q.y < -1e-3 || q.x > s.n0.x - 1.0 + 1e-3 || q.y > s.n0.y - 1.0 + 1e-3)) return false;
+    if (!hfgi_scan_inside(s, q)) return false;
     float dh = hfgi_height_at(s, hfgi_scan_level(i, s.level_bias, n_v), q) - base;
     slope = dh / (t * s.texel_size);
     return true;

@@ -78,7 +78,7 @@ struct hfgi_IndirectPush {
     uint scan_extent;     // near_steps | far_steps << 16, as in hfgi_VisibilityPush
     vec4 specular;        // Phong k_s (vector pyramid)
     uint sample_offset;   // first azimuth of this dispatch (frame::shared::azimuth_chunks)
-    uint pad0;
+    uint probes;          // gi.radial_probes
     uint pad1;
     uint pad2;
 };

@@ -29,15 +29,43 @@ layout(std430, binding = 10) readonly buffer Consts {                         //
     float hfgi_zh_glossy[8]; // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
+layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };           // pyramid.max (with the bound)
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 #define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : hfgi_radiance_stack[i])
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
+#include "hfgi_max.glsl"
 
 float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_N2];
+uint hfgi_max_ov[HFGI_MAX_LEVELS]; // offsets of the ov levels (hfgi_max.glsl)
+uint hfgi_max_levels;
+
+// The max pyramid's ov offsets (hfgi_max.glsl), once per receiver; returns the largest height.
+float max_begin(uvec2 n0) {
+    hfgi_max_levels = hfgi_max_count(n0);
+    uint total = 0u;
+    for (uint l = 0u; l < hfgi_max_levels; ++l) {
+        uvec2 s = hfgi_max_size(n0, l);
+        hfgi_max_ov[l] = total;
+        total += s.x * s.y;
+    }
+    for (uint l = 0u; l < hfgi_max_levels; ++l) hfgi_max_ov[l] += total;
+    return hfgi_max[hfgi_max_ov[hfgi_max_levels - 1u]];
+}
+
+// An upper bound of the bilinear level-0 surface over the segment a–b (hfgi_max.glsl): the ov
+// cell of the finest level whose cells are at least as large as the segment's box.
+float max_over(vec2 a, vec2 b, uvec2 n0) {
+    vec2 lo = min(a, b), hi = max(a, b);
+    uint e = uint(ceil(max(hi.x - lo.x, hi.y - lo.y)));
+    uint level = min(e <= 1u ? 0u : uint(findMSB(e - 1u)) + 1u, hfgi_max_levels - 1u);
+    uvec2 s = hfgi_max_size(n0, level);
+    ivec2 c = clamp(ivec2(floor(lo / float(1u << level))), ivec2(0), ivec2(s) - 1);
+    return hfgi_max[hfgi_max_ov[level] + uint(c.y) * s.x + uint(c.x)];
+}
 
 // CONVENTIONS.md height gradient at texel (i, j) of level 0 (one-sided at the border, periodic
 // with wrap).
@@ -134,6 +162,73 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stac
     return rad;
 }
 
+// Casting-set member (eq. 6) at q with slope tan ω, seen over [running, ω): eq. 12 telescoped.
+void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running_slope, float slope, uint rl, vec2 q,
+                 vec2 d, hfgi_Scan scan, bool wrap) {
+    float omega = atan(slope);
+    float seg[HFGI_NE];
+    hfgi_elevation(running, omega, seg);
+    vec3 rad = member_radiance(rl, q, omega, d, scan.work, pc.radiance_stack != 0u, wrap, scan.raw0);
+    for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
+    running = omega;
+    running_slope = slope;
+}
+
+// The casting set along direction d from the running horizon `running` (eq. 6, 12): the ladder
+// samples and, before each, its radial probes (docs/indirect.md §2), with the max-pyramid bound
+// when `bounded` (`gmax`: the field's largest height; `bmin`: the receiver's lowest base).
+void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
+              inout vec3 u[HFGI_NE]) {
+    float running_slope = tan(running);
+    // One loop over the ladder samples and, before each, its radial probes: level-0
+    // samples between ladder samples more than a texel apart, at most one per texel of the
+    // gap (thin spikes the ladder steps over; docs/accuracy.md §4). One loop, not two
+    // nested: lavapipe pays for an inner loop even when it runs no iteration.
+    float t_prev = 0.0, t = 0.0;
+    vec2 q = scan.p;
+    uint lv = 0u, rl = 0u;
+    int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
+    while (i < scan.end) {
+        if (np < 0) {
+            t = hfgi_scan_t(scan, i, HFGI_NV);
+            q = scan.p + t * d;
+            if (!hfgi_scan_inside(scan, q)) break;
+            lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
+            rl = hfgi_radiance_level[i - scan.first];
+            // The max pyramid's bound: nothing past t_prev can rise above the running
+            // slope → stop; nothing on level 0 in (t_prev, t] can → no probes, and no
+            // sample when it reads level 0. Conservative: the members are the same.
+            bool clear = false;
+            if (bounded) {
+                if (t_prev > 0.0 && gmax - bmin <= running_slope * t_prev * scan.texel_size) break;
+                float m = max_over(scan.p + t_prev * d, q, uvec2(scan.n0)) - hfgi_base[0];
+                clear = m <= running_slope * (m > 0.0 ? t_prev : t) * scan.texel_size;
+            }
+            np = clear ? 0 : clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
+            s2 = 1;
+            if (clear && lv == 0u) {
+                t_prev = t;
+                ++i;
+                np = -1;
+                continue;
+            }
+        }
+        bool probe = s2 <= np;
+        float tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
+        vec2 qp = scan.p + tp * d;
+        uint lq = probe ? 0u : lv;
+        float sp = (hfgi_height_at(scan, lq, qp) - hfgi_base[lq]) / (tp * scan.texel_size);
+        if (sp > running_slope) cast_member(u, running, running_slope, sp, rl, qp, d, scan, wrap);
+        if (probe) {
+            ++s2;
+        } else {
+            t_prev = t;
+            ++i;
+            np = -1;
+        }
+    }
+}
+
 void main() {
     uvec2 r = gl_GlobalInvocationID.xy;
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
@@ -142,7 +237,13 @@ void main() {
                                      pc.texel_size, pc.stack_mode != 0u, wrap, pc.flags, pc.scan_extent, HFGI_NV);
     vec3 N = normal_at(scan.p, wrap);
     bool tangent = (pc.flags & HFGI_FLAG_TANGENT) != 0u;
-    for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+    float bmin = 3.402823466e38;
+    for (int l = 0; l < HFGI_NV; ++l) {
+        hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+        bmin = min(bmin, hfgi_base[l]);
+    }
+    bool bounded = (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
+    float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;
@@ -163,24 +264,7 @@ void main() {
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }
-        float running_slope = tan(running);
-        for (int i = scan.first; i < scan.end; ++i) {
-            vec2 q;
-            float slope;
-            float b = hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)];
-            if (!hfgi_scan_slope(scan, i, HFGI_NV, d, b, q, slope)) break;
-            if (slope > running_slope) {
-                float omega = atan(slope);
-                // Casting-set member (eq. 6), seen over [running, ω): eq. 12 telescoped.
-                float seg[HFGI_NE];
-                hfgi_elevation(running, omega, seg);
-                vec3 rad = member_radiance(hfgi_radiance_level[i - scan.first], q, omega, d, scan.work,
-                                           pc.radiance_stack != 0u, wrap, scan.raw0);
-                for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
-                running = omega;
-                running_slope = slope;
-            }
-        }
+        scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
         // eq. 19–21 folded: U += A_j u_j.
         uint base = j * uint(HFGI_N2 * HFGI_NE);
         for (int k = 0; k < HFGI_N2; ++k) {

@@ -9,16 +9,19 @@
 //!   `glossy`, and writes the bounce's exit radiance (the next bounce's input) to the bounce
 //!   buffer.
 //!
-//! Barriers: compute→compute after each stage.
+//! With [`uses_max_bound`] the pass also owns the max pyramid (stage `pyramid.max`,
+//! [`MaxPyramid`]; the renderer records it when the heights change) and the scan skips what it
+//! rules out (docs/accuracy.md §4). Barriers: compute→compute after each stage.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
+use super::pyramid_max::{uses_max_bound, MaxPyramid};
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
 use super::shade::ShadePass;
-use super::shared::{azimuth_chunks, IndirectPush, ShadePush, FLAG_ACCUMULATE, INDIRECT_LOOP_BUDGET};
+use super::shared::{azimuth_chunks, IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND, INDIRECT_LOOP_BUDGET};
 use crate::error::Result;
 use crate::math::{azimuth, elevation};
 use crate::reference::direct::scan_steps;
@@ -33,14 +36,19 @@ pub const STAGE_SHADE: &str = "indirect.shade";
 
 pub struct IndirectPass {
     pub radiance: RadiancePyramid,
+    /// The max pyramid the scan's bound reads ([`uses_max_bound`]).
+    pub max: Option<MaxPyramid>,
     scan: ComputePipeline,
     scan_set: vk::DescriptorSet,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
     buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce, incident
     push: IndirectPush,
-    /// Azimuth chunks `(first, count)`, one dispatch each.
-    chunks: Vec<(u32, u32)>,
+    /// `gi.radial_probes_later` (`push.probes` is the first bounce's).
+    probes_later: u32,
+    /// Azimuth chunks `(first, count)`, one dispatch each: of the first bounce's scan and of
+    /// the later ones' (their probes differ, and a probe is a loop iteration like a sample).
+    chunks: [Vec<(u32, u32)>; 2],
     shade_push: ShadePush,
 }
 
@@ -65,6 +73,7 @@ impl IndirectPass {
         let mut bufs: Vec<Buffer> = Vec::new();
         let mut pipes: Vec<ComputePipeline> = Vec::new();
         let mut radiance = None;
+        let mut max = None;
         let made = (|| -> Result<(vk::DescriptorSet, vk::DescriptorSet)> {
             let u_bytes = (ww as u64 * wh as u64) * (n * n) as u64 * 16;
             for (name, size) in [
@@ -102,13 +111,16 @@ impl IndirectPass {
                     radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32
                 })
                 .collect();
+            if uses_max_bound(scene) {
+                max = Some(MaxPyramid::new(ctx, pyramid)?);
+            }
             memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
             let scan = ComputePipeline::new(
                 ctx,
                 &shaders::INDIRECT_SCAN_COMP,
-                &[DescriptorKind::StorageBuffer; 11],
+                &[DescriptorKind::StorageBuffer; 12],
                 std::mem::size_of::<IndirectPush>() as u32,
                 &[
                     (0, n as u32),
@@ -136,6 +148,8 @@ impl IndirectPass {
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[U]),
                     Bind::Buffer(consts),
+                    // Without the bound the scan never reads binding 11: any buffer.
+                    Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
                 ],
             )?;
             let sh = ComputePipeline::new(
@@ -171,6 +185,9 @@ impl IndirectPass {
                 if let Some(r) = radiance {
                     r.destroy(ctx);
                 }
+                if let Some(m) = max {
+                    m.destroy(ctx);
+                }
                 return Err(e);
             }
         };
@@ -194,39 +211,60 @@ impl IndirectPass {
                 [k[0], k[1], k[2], 0.0]
             },
             sample_offset: 0,
-            pad: [0; 3],
+            probes: gi.radial_probes,
+            pad: [0; 2],
         };
         let e = elevation::gpu_size(gi.elevation_basis, n);
         Ok(Self {
             radiance: radiance.expect("radiance"),
+            max,
             scan: scan_pipe,
             scan_set,
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
-            chunks: azimuth_chunks(push.sample_count, ((ladder.len() + n * n) * e) as u32, INDIRECT_LOOP_BUDGET),
+            chunks: [gi.radial_probes, gi.radial_probes_later].map(|p| {
+                let cost = (ladder.len() * (1 + p as usize) + n * n) * e;
+                azimuth_chunks(push.sample_count, cost as u32, INDIRECT_LOOP_BUDGET)
+            }),
             push,
+            probes_later: gi.radial_probes_later,
             shade_push: shade.push(),
         })
     }
 
-    /// Records bounces `1..=bounces`: radiance pyramid, scan, shade for each.
+    /// Records the max pyramid (if the scan uses it), then bounces `1..=bounces`: radiance
+    /// pyramid, scan, shade for each. After new heights (the max pyramid reads them).
     pub fn record(&self, rec: &mut Recorder, bounces: u32) {
+        self.record_max(rec);
         for b in 1..=bounces {
             self.radiance.record(rec, b);
-            self.record_scan(rec);
+            self.record_scan(rec, b);
             self.record_shade(rec, b);
         }
     }
 
-    /// Records the scan of the radiance pyramid (stage `indirect.scan`).
-    pub fn record_scan(&self, rec: &mut Recorder) {
+    /// Records stage `pyramid.max` if the scan uses the bound (nothing otherwise); after the
+    /// heights' level 0 is written.
+    pub fn record_max(&self, rec: &mut Recorder) {
+        if let Some(m) = &self.max {
+            m.record(rec);
+        }
+    }
+
+    /// Records the scan of bounce `bounce` (1-based) of the radiance pyramid (stage
+    /// `indirect.scan`).
+    pub fn record_scan(&self, rec: &mut Recorder, bounce: u32) {
+        let probes = if bounce > 1 { self.probes_later } else { self.push.probes };
+        // The bound pays where it saves probes; without probes it costs more than it saves
+        // (docs/accuracy.md §4).
+        let bound = if self.max.is_some() && probes > 0 { FLAG_MAX_BOUND } else { 0 };
         rec.scope(STAGE_SCAN, |ctx, cmd| {
             let g = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
             // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into U.
-            for (i, (first, count)) in self.chunks.iter().enumerate() {
-                let flags = self.push.flags | if i > 0 { FLAG_ACCUMULATE } else { 0 };
-                let push = IndirectPush { sample_offset: *first, sample_count: *count, flags, ..self.push };
+            for (i, (first, count)) in self.chunks[(bounce > 1) as usize].iter().enumerate() {
+                let flags = self.push.flags | bound | if i > 0 { FLAG_ACCUMULATE } else { 0 };
+                let push = IndirectPush { sample_offset: *first, sample_count: *count, flags, probes, ..self.push };
                 self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&push), g);
                 barrier::compute_to_compute(ctx, cmd);
             }
@@ -274,7 +312,9 @@ impl IndirectPass {
     }
 
     pub fn memory_bytes(&self) -> u64 {
-        self.buffers.iter().map(|b| b.size).sum::<u64>() + self.radiance.memory_bytes()
+        self.buffers.iter().map(|b| b.size).sum::<u64>()
+            + self.radiance.memory_bytes()
+            + self.max.as_ref().map_or(0, |m| m.memory_bytes())
     }
 
     pub fn destroy(mut self, ctx: &Context) {
@@ -282,6 +322,9 @@ impl IndirectPass {
         self.shade.destroy(ctx);
         self.buffers.drain(..).for_each(|b| b.destroy(ctx));
         self.radiance.destroy(ctx);
+        if let Some(m) = self.max.take() {
+            m.destroy(ctx);
+        }
     }
 }
 

@@ -5,6 +5,7 @@
 pub mod indirect;
 pub mod plan;
 pub mod pyramid;
+pub mod pyramid_max;
 pub mod radiance;
 pub mod renderer;
 pub mod shade;

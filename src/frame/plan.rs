@@ -7,7 +7,10 @@
 //! recording. The rules (docs/plan.md §1):
 //!
 //! - heights changed since the last frame (always on the first): `pyramid.decimate`, in stack
-//!   mode `pyramid.synthesize`, then the visibility; unchanged heights keep all of them;
+//!   mode `pyramid.synthesize`, `pyramid.max` when the indirect scan bounds its rays with it
+//!   (indirect light with radial probes, `gi.level0 = "bilinear"`, no wrap), then the
+//!   visibility; unchanged
+//!   heights keep all of them;
 //! - `visibility.environment` only with a non-zero environment (some SH coefficient ≠ 0),
 //!   `visibility.key_lights` only with key lights;
 //! - `shade.direct`, then per bounce `b = 1..B`: `radiance.gather`, `radiance.decimate`,
@@ -21,6 +24,7 @@ use std::fmt;
 
 use super::indirect::{STAGE_SCAN, STAGE_SHADE};
 use super::pyramid::{PyramidLayout, STAGE_DECIMATE, STAGE_SYNTHESIZE};
+use super::pyramid_max::{why_no_max_bound, STAGE_MAX};
 use super::radiance::{STAGE_DECIMATE as RAD_DECIMATE, STAGE_GATHER, STAGE_SYNTHESIZE as RAD_SYNTHESIZE};
 use super::renderer::{needs_indirect, vector_pyramid};
 use super::shade::STAGE_DIRECT;
@@ -32,6 +36,7 @@ use crate::scene::model::{Albedo, GlossyPyramid, PyramidMode, Scene};
 pub enum Stage {
     PyramidDecimate,
     PyramidSynthesize,
+    PyramidMax,
     VisibilityEnvironment,
     VisibilityKeyLights,
     ShadeDirect,
@@ -48,6 +53,7 @@ impl Stage {
         match self {
             Stage::PyramidDecimate => STAGE_DECIMATE,
             Stage::PyramidSynthesize => STAGE_SYNTHESIZE,
+            Stage::PyramidMax => STAGE_MAX,
             Stage::VisibilityEnvironment => STAGE_ENVIRONMENT,
             Stage::VisibilityKeyLights => STAGE_KEY_LIGHTS,
             Stage::ShadeDirect => STAGE_DIRECT,
@@ -173,6 +179,9 @@ pub struct Planner {
     vector: bool,
     channels: u32,
     amortize: bool,
+    /// Why the indirect scan does not read the max pyramid (`None`: it does; with indirect
+    /// light only).
+    no_max_bound: Option<&'static str>,
 }
 
 /// The plan of `frame` for `scene` (`Planner::new(scene).plan(frame)`).
@@ -212,6 +221,7 @@ impl Planner {
             vector,
             channels: if vector { 3 + 3 * n2 } else { 3 },
             amortize: gi.amortize,
+            no_max_bound: why_no_max_bound(scene),
         }
     }
 
@@ -309,6 +319,14 @@ impl Planner {
                     reason: format!("gi.bounces = {} and the surface reflects light ({reflects})", self.bounces),
                 });
                 passes.push(PlannedPass {
+                    name: "MaxPyramid",
+                    created: self.no_max_bound.is_none(),
+                    reason: match self.no_max_bound {
+                        None => "part of IndirectPass: level-0 maxima that bound the radial probes".into(),
+                        Some(why) => why.into(),
+                    },
+                });
+                passes.push(PlannedPass {
                     name: "RadiancePyramid",
                     created: true,
                     reason: format!(
@@ -364,6 +382,15 @@ impl Planner {
                     "pyramid mode: the levels are B-spline filtered on the fly".into(),
                 ),
             }
+            if self.no_indirect().is_none() {
+                match self.no_max_bound {
+                    None => {
+                        let r = "the indirect scan bounds its radial probes by level-0 maxima";
+                        add(&mut stages, Stage::PyramidMax, r.into());
+                    }
+                    Some(why) => add(&mut omitted, Stage::PyramidMax, why.into()),
+                }
+            }
             if self.environment {
                 let r = format!("environment light is non-zero ({} azimuths); {why}", self.azimuths);
                 add(&mut stages, Stage::VisibilityEnvironment, r);
@@ -386,6 +413,9 @@ impl Planner {
             add(&mut omitted, Stage::PyramidDecimate, why.into());
             if self.mode == PyramidMode::Stack {
                 add(&mut omitted, Stage::PyramidSynthesize, why.into());
+            }
+            if self.no_max_bound.is_none() && self.no_indirect().is_none() {
+                add(&mut omitted, Stage::PyramidMax, why.into());
             }
             let why = "heights unchanged since the last frame: the visibility is kept";
             if self.environment {

@@ -17,7 +17,7 @@ use crate::error::Result;
 use crate::scene::model::PyramidMode;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
-use crate::vk::{barrier, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+use crate::vk::{barrier, Buffer, ComputePipeline, Context, Recorder};
 
 pub const STAGE_GATHER: &str = "radiance.gather";
 pub const STAGE_DECIMATE: &str = "radiance.decimate";
@@ -72,30 +72,15 @@ impl RadiancePyramid {
             None => (3, mode),
         };
         let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, radiance_kind(channels))?;
-        let made = (|| {
-            let mut p = ComputePipeline::new(
-                ctx,
-                &shaders::RADIANCE_GATHER_COMP,
-                &[DescriptorKind::StorageBuffer; 5],
-                std::mem::size_of::<GatherPush>() as u32,
-                &[],
-                1,
-            )?;
-            let binds = [
-                Bind::Buffer(inputs.shade),
-                Bind::Buffer(inputs.bounce),
-                Bind::Buffer(pyramid.levels_buffer()),
-                Bind::Buffer(inputs.incident_direct),
-                Bind::Buffer(inputs.incident_bounce),
-            ];
-            match p.allocate_set(ctx, &binds) {
-                Ok(set) => Ok((p, set)),
-                Err(e) => {
-                    p.destroy(ctx);
-                    Err(e)
-                }
-            }
-        })();
+        let binds = [
+            Bind::Buffer(inputs.shade),
+            Bind::Buffer(inputs.bounce),
+            Bind::Buffer(pyramid.levels_buffer()),
+            Bind::Buffer(inputs.incident_direct),
+            Bind::Buffer(inputs.incident_bounce),
+        ];
+        let push_size = std::mem::size_of::<GatherPush>() as u32;
+        let made = ComputePipeline::with_storage_set(ctx, &shaders::RADIANCE_GATHER_COMP, push_size, &binds);
         match made {
             Ok((gather, set)) => {
                 let push = GatherPush {

@@ -135,13 +135,14 @@ impl Renderer {
         match stage {
             Stage::PyramidDecimate => self.pyramid.record_decimate(rec),
             Stage::PyramidSynthesize => self.pyramid.record_synthesize(rec),
+            Stage::PyramidMax => ind.into_iter().for_each(|i| i.record_max(rec)),
             Stage::VisibilityEnvironment => self.visibility.record_sets(rec, true),
             Stage::VisibilityKeyLights => self.visibility.record_sets(rec, false),
             Stage::ShadeDirect => self.shade.record(rec),
             Stage::RadianceGather(b) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec, b)),
             Stage::RadianceDecimate(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_decimate(rec)),
             Stage::RadianceSynthesize(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_synthesize(rec)),
-            Stage::IndirectScan(_) => ind.into_iter().for_each(|i| i.record_scan(rec)),
+            Stage::IndirectScan(b) => ind.into_iter().for_each(|i| i.record_scan(rec, b)),
             Stage::IndirectShade(b) => ind.into_iter().for_each(|i| i.record_shade(rec, b)),
         }
     }

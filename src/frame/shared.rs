@@ -37,6 +37,9 @@ pub const FLAG_TANGENT: u32 = 4;
 
 /// `HFGI_FLAG_ACCUMULATE`: add to the output instead of overwriting it (azimuth chunks).
 pub const FLAG_ACCUMULATE: u32 = 8;
+/// `HFGI_FLAG_MAX_BOUND`: the indirect scan skips the intervals and the far end that the max
+/// pyramid (stage `pyramid.max`) rules out.
+pub const FLAG_MAX_BOUND: u32 = 16;
 
 /// Loop iterations one invocation of the visibility pass may run per dispatch, counted as
 /// `ladder + n²·e` per azimuth (the scan, then the fold `A_j v_j`; `e` values per azimuth,
@@ -161,7 +164,9 @@ pub struct IndirectPush {
     pub specular: [f32; 4],
     /// First azimuth sample of this dispatch ([`azimuth_chunks`]).
     pub sample_offset: u32,
-    pub pad: [u32; 3],
+    /// `gi.radial_probes`: level-0 probes between two ladder samples.
+    pub probes: u32,
+    pub pad: [u32; 2],
 }
 
 /// `hfgi_GatherPush`: push constants of `radiance.gather`.
@@ -184,6 +189,7 @@ pub struct GatherPush {
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
 const _: () = assert!(std::mem::offset_of!(IndirectPush, specular) == 48);
 const _: () = assert!(std::mem::offset_of!(IndirectPush, sample_offset) == 64);
+const _: () = assert!(std::mem::offset_of!(IndirectPush, probes) == 68);
 const _: () = assert!(std::mem::offset_of!(VisibilityPush, flags) == 40);
 const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
 

@@ -54,6 +54,8 @@ pub struct Scan<'a> {
     pub far: usize,
     /// Elevation basis of the per-azimuth vectors (`gi.elevation_basis`).
     pub basis: ElevationBasis,
+    /// `gi.radial_probes`: level-0 probes between two ladder samples (indirect scans only).
+    pub probes: usize,
 }
 
 impl<'a> Scan<'a> {
@@ -70,7 +72,22 @@ impl<'a> Scan<'a> {
             near: gi.near_steps as usize,
             far: gi.far_steps() as usize,
             basis: gi.elevation_basis,
+            probes: gi.radial_probes as usize,
         }
+    }
+
+    /// Step `t` (texels) of ladder position `idx` (sample `i = idx − near`, eq. 14).
+    pub fn step(&self, idx: usize) -> f64 {
+        let n_v = self.pyr.layout.count() as i64;
+        let l0 = self.pyr.layout.levels[0];
+        let i = idx as i64 - self.near as i64;
+        (l0.width.max(l0.height) as f64) * 2f64.powf(-((n_v - 1 - i) as f64) / self.k_v as f64)
+    }
+
+    /// Blocking angle at level-0 position `q` against the receiver `p`, both on level 0, at
+    /// distance `t` texels (a radial probe).
+    pub fn probe(&self, p: [f64; 2], q: [f64; 2], t: f64) -> f64 {
+        ((self.height(0, q[0], q[1]) - self.height(0, p[0], p[1])) / (t * self.texel_size)).atan()
     }
 
     /// Height at pyramid level `level`, level-0 position `(x, y)`, as the scan reads it.

@@ -95,18 +95,34 @@ pub fn scan_radiance(
         }
         running = limit;
     }
-    for (i, q, omega) in scan.samples(p, phi) {
-        if omega > running {
-            // Casting-set member (eq. 6): it is seen over [running, ω); eq. 12 telescoped.
-            let seg = elevation::interval(scan.basis, n, running, omega);
+    // Casting-set member (eq. 6) of ladder position i: it is seen over [running, ω); eq. 12
+    // telescoped.
+    let mut cast = |i: usize, q: [f64; 2], omega: f64, running: &mut f64| {
+        if omega > *running {
+            let seg = elevation::interval(scan.basis, n, *running, omega);
             let rad = radiance(i, q, omega);
             for (c, uc) in u.iter_mut().enumerate() {
                 for (a, b) in uc.iter_mut().zip(&seg) {
                     *a += rad[c] * b;
                 }
             }
-            running = omega;
+            *running = omega;
         }
+    };
+    let mut t_prev = 0.0;
+    for (i, q, omega) in scan.samples(p, phi) {
+        // Radial probes (docs/accuracy.md §4): level-0 samples evenly between this sample and
+        // the previous one when they are more than a texel apart, read with this sample's
+        // radiance level. (The GPU skips those its max-pyramid bound rules out: the same members.)
+        let t = scan.step(i);
+        let np = ((t - t_prev).ceil() as i64 - 1).clamp(0, scan.probes as i64);
+        for s in 1..=np {
+            let tp = t_prev + (t - t_prev) * s as f64 / (np + 1) as f64;
+            let qp = [p[0] + tp * dx, p[1] + tp * dy];
+            cast(i, qp, scan.probe(p, qp, tp), &mut running);
+        }
+        t_prev = t;
+        cast(i, q, omega, &mut running);
     }
     u
 }
@@ -172,7 +188,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let stack = gi.pyramid == PyramidMode::Stack;
     let z0 = crate::frame::renderer::height_origin(&scene.field);
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
-    let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
+    let mut scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let tangent = gi.omega_min == OmegaMin::Tangent;
     let set = environment_set(gi.azimuths as usize, gi.interpolation);
     let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
@@ -191,7 +207,8 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
         (direct.direct.clone(), direct.glossy.clone(), direct.incident.clone());
     let mut indirect_bounces = Vec::new();
     let mut glossy_bounces = Vec::new();
-    for _ in 0..gi.bounces {
+    for bounce in 1..=gi.bounces {
+        scan.probes = gi.probes(bounce) as usize;
         let mut images: Vec<Vec<f64>> = if vector {
             (0..3).map(|c| diffuse_src.iter().map(|v| v[c]).collect()).collect()
         } else {

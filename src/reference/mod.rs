@@ -3,6 +3,7 @@
 pub mod cap;
 pub mod direct;
 pub mod indirect;
+pub mod max;
 pub mod pyramid;
 pub mod ray;
 pub mod sh_eval;

@@ -228,6 +228,12 @@ pub struct GiSettings {
     pub horizon: Horizon,
     /// Scan samples inside the first texel, `t = 2^(−j/k)` for `j = 1..=near_steps`, 0..=64.
     pub near_steps: u32,
+    /// Level-0 probes between two ladder samples more than a texel apart, 0..=16, at most one
+    /// per texel of the gap (docs/accuracy.md §4: thin spikes between the ladder's samples), in
+    /// the first bounce's indirect scan.
+    pub radial_probes: u32,
+    /// The same for the scans of bounces 2 and later (which carry less light), 0..=16.
+    pub radial_probes_later: u32,
     /// Far end of the ladder.
     pub scan_reach: ScanReach,
     /// Lower end of the casting set.
@@ -250,13 +256,13 @@ impl GiSettings {
     /// which lowers the SH truncation floor against the exact reference; an order-4 environment
     /// is used as given, its higher bands zero).
     pub fn preset(q: Quality) -> Self {
-        // (n, m, k, o, sub-sampling, k_u, o_u, near steps)
-        let (n, m, k, o, sub, ku, ou, near) = match q {
-            Quality::Draft => (4, 16, 2, 4, 2, 2, 2, 2),
-            Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4),
-            Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0),
-            Quality::High => (6, 64, 12, 8, 1, 8, 6, 16),
-            Quality::Ultra => (8, 128, 24, 8, 1, 16, 8, 64),
+        // (n, m, k, o, sub-sampling, k_u, o_u, near steps, radial probes: first bounce, later)
+        let (n, m, k, o, sub, ku, ou, near, probes) = match q {
+            Quality::Draft => (4, 16, 2, 4, 2, 2, 2, 2, (0, 0)),
+            Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4, (0, 0)),
+            Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0, (0, 0)),
+            Quality::High => (6, 64, 12, 8, 1, 8, 6, 16, (4, 0)),
+            Quality::Ultra => (8, 128, 24, 8, 1, 16, 8, 64, (0, 0)),
         };
         let paper = q == Quality::Paper;
         Self {
@@ -277,6 +283,8 @@ impl GiSettings {
             level0: if paper { Level0::Bspline } else { Level0::Bilinear },
             horizon: if paper { Horizon::Bspline } else { Horizon::Samples },
             near_steps: if paper { 0 } else { near },
+            radial_probes: probes.0,
+            radial_probes_later: probes.1,
             scan_reach: if paper { ScanReach::Side } else { ScanReach::Diagonal },
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
@@ -302,7 +310,7 @@ impl GiSettings {
         format!(
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
-             scan_reach={} omega_min={} elevation_basis={} key_light_azimuths={} bounces={}",
+             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} key_light_azimuths={} bounces={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -316,12 +324,23 @@ impl GiSettings {
             self.level0,
             self.horizon,
             self.near_steps,
+            self.radial_probes,
+            self.radial_probes_later,
             self.scan_reach,
             self.omega_min,
             self.elevation_basis,
             self.key_light_azimuths,
             self.bounces
         )
+    }
+
+    /// Radial probes of bounce `bounce` (1-based) ([`GiSettings::radial_probes`], `_later`).
+    pub fn probes(&self, bounce: u32) -> u32 {
+        if bounce <= 1 {
+            self.radial_probes
+        } else {
+            self.radial_probes_later
+        }
     }
 
     /// Scan samples past `t = max(W, H)` texels: `⌈k/2⌉` with [`ScanReach::Diagonal`].
@@ -449,6 +468,8 @@ impl GiSettings {
         check("gi.radiance_level_step", self.radiance_level_step, 1, 16)?;
         check("gi.radiance_level_offset", self.radiance_level_offset, 0, 8)?;
         check("gi.near_steps", self.near_steps, 0, 64)?;
+        check("gi.radial_probes", self.radial_probes, 0, 16)?;
+        check("gi.radial_probes_later", self.radial_probes_later, 0, 16)?;
         Ok(())
     }
 

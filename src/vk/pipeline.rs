@@ -99,6 +99,25 @@ impl ComputePipeline {
         }
     }
 
+    /// A pipeline with one descriptor set holding `binds` (all storage buffers), destroyed
+    /// again if the set cannot be made.
+    pub fn with_storage_set(
+        ctx: &Context,
+        shader: &Spirv,
+        push_size: u32,
+        binds: &[Bind],
+    ) -> Result<(Self, vk::DescriptorSet)> {
+        let kinds = vec![DescriptorKind::StorageBuffer; binds.len()];
+        let mut p = Self::new(ctx, shader, &kinds, push_size, &[], 1)?;
+        match p.allocate_set(ctx, binds) {
+            Ok(set) => Ok((p, set)),
+            Err(e) => {
+                p.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
     /// Allocates and writes one descriptor set; `binds[i]` goes to binding `i`.
     pub fn allocate_set(&self, ctx: &Context, binds: &[Bind]) -> Result<vk::DescriptorSet> {
         allocate_set(ctx, &self.name, self.pool, self.set_layout, &self.kinds, binds)
