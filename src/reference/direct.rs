@@ -54,7 +54,8 @@ pub struct Scan<'a> {
     pub far: usize,
     /// Elevation basis of the per-azimuth vectors (`gi.elevation_basis`).
     pub basis: ElevationBasis,
-    /// `gi.radial_probes`: level-0 probes between two ladder samples (indirect scans only).
+    /// Level-0 probes between two ladder samples, of the bounce being scanned
+    /// (`GiSettings::probes`; indirect scans only, `render_gi` sets it per bounce).
     pub probes: usize,
 }
 
@@ -144,13 +145,12 @@ impl<'a> Scan<'a> {
         let n_v = layout.count();
         let l0 = layout.levels[0];
         let (w, h) = (l0.width as f64, l0.height as f64);
-        let big_n = w.max(h);
         let (dx, dy) = (phi.cos(), phi.sin());
         let near = self.near as i64;
         (0..self.near + n_v + self.far)
             .map(move |idx| {
                 let i = idx as i64 - near;
-                let t = big_n * 2f64.powf(-((n_v as i64 - 1 - i) as f64) / self.k_v as f64);
+                let t = self.step(idx);
                 (idx, i, t, [p[0] + t * dx, p[1] + t * dy])
             })
             .take_while(move |(_, _, _, q)| {
