@@ -23,10 +23,14 @@ const RS: &str = "radiance.synthesize";
 const IS: &str = "indirect.scan";
 const ISH: &str = "indirect.shade";
 
-/// A small scene (24², 8 azimuths): sky + one key light, albedo 0.7, no bounces.
+/// A small scene (24², 8 azimuths): sky + one key light, albedo 0.7, no bounces, no radial
+/// probes (so no `pyramid.max`: `synthesize_stages_only_in_stack_mode` and the `hfgi plan` test
+/// cover it, the latter with the `default` preset's probes).
 fn base() -> Scene {
     let mut s = scene(rough_field(24, 24, 11));
     s.gi.azimuths = 8;
+    s.gi.radial_probes = 0;
+    s.gi.radial_probes_later = 0;
     s
 }
 
@@ -287,14 +291,15 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
     for want in [
         "passes (Renderer::new):",
         "IndirectPass     created",
-        "frame 0 (heights changed): 10 stages",
+        "frame 0 (heights changed): 11 stages",
         "1. pyramid.decimate         first frame: heights uploaded",
         "2. pyramid.synthesize       stack mode",
-        "3. visibility.environment   environment light is non-zero",
-        "4. visibility.key_lights    1 key light",
-        "5. shade.direct             heights changed",
-        "6. radiance.gather          gi.bounces = 1, bounce 1 of 1",
-        "10. indirect.shade",
+        "3. pyramid.max              the indirect scan bounds its radial probes",
+        "4. visibility.environment   environment light is non-zero",
+        "5. visibility.key_lights    1 key light",
+        "6. shade.direct             heights changed",
+        "7. radiance.gather          gi.bounces = 1, bounce 1 of 1",
+        "11. indirect.shade",
         "frame 1 (heights unchanged): 5 stages",
         "amortised: odd static frame shades the indirect light",
         "frame 2 (heights unchanged): 1 stage",
@@ -302,6 +307,8 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
         "not recorded: heights unchanged since the last frame",
         "resolved knobs: quality=default sh_order=4 azimuths=32 level_step=4",
         "level0=bilinear horizon=samples",
+        "radial_probes=2 radial_probes_later=0",
+        "MaxPyramid       created",
         "elevation_basis=legendre",
     ] {
         assert!(text.contains(want), "`hfgi plan` output lacks {want:?}");

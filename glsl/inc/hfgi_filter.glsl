@@ -7,18 +7,11 @@
 #ifndef HFGI_FILTER_GLSL
 #define HFGI_FILTER_GLSL
 #include "hfgi_shared.glsl"
+#include "hfgi_address.glsl"
 
 #ifndef HFGI_LEVEL_READ
 #define HFGI_LEVEL_READ(l, i) hfgi_levels[i]
 #endif
-
-int hfgi_address(int p, int n, bool wrap) {
-    if (wrap) {
-        int m = p % n;
-        return m < 0 ? m + n : m;
-    }
-    return clamp(p, 0, n - 1);
-}
 
 float hfgi_fetch(hfgi_Level l, ivec2 p, bool wrap) {
     int x = hfgi_address(p.x, int(l.width), wrap);

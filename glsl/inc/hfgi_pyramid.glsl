@@ -12,10 +12,19 @@
 #define HFGI_STACK_READ(source, i) hfgi_stack[i]
 #endif
 
-float hfgi_stack_fetch(uint source, uint plane, ivec2 p, uvec2 work, bool wrap) {
-    int x = hfgi_address(p.x, int(work.x), wrap);
-    int y = hfgi_address(p.y, int(work.y), wrap);
-    return HFGI_STACK_READ(source, plane * work.x * work.y + uint(y) * work.x + uint(x));
+// Bilinear value of stack plane `plane` (of `source`) at level-0 position p0: the working grid's
+// four texels around p0, their addresses computed once.
+float hfgi_stack_bilinear(uint source, uint plane, vec2 p0, vec2 n0, uvec2 work, bool wrap) {
+    vec2 pw = (p0 + 0.5) * vec2(work) / n0 - 0.5;
+    vec2 fl = floor(pw);
+    vec2 f = pw - fl;
+    ivec2 i = ivec2(fl);
+    int w = int(work.x), h = int(work.y);
+    uint x0 = uint(hfgi_address(i.x, w, wrap)), x1 = uint(hfgi_address(i.x + 1, w, wrap));
+    uint r0 = plane * work.x * work.y + uint(hfgi_address(i.y, h, wrap)) * work.x;
+    uint r1 = plane * work.x * work.y + uint(hfgi_address(i.y + 1, h, wrap)) * work.x;
+    return hfgi_bilerp(HFGI_STACK_READ(source, r0 + x0), HFGI_STACK_READ(source, r0 + x1),
+                       HFGI_STACK_READ(source, r1 + x0), HFGI_STACK_READ(source, r1 + x1), f);
 }
 
 // Flags of hfgi_VisibilityPush.flags / hfgi_IndirectPush.flags (docs/accuracy.md §4; the Rust
@@ -35,17 +44,7 @@ float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 
                       bool raw) {
     vec2 n0 = vec2(float(base.width), float(base.height));
     if (raw) return hfgi_bilinear_at(l, hfgi_rescale(p0, n0, l), wrap);
-    if (stack_mode) {
-        vec2 pw = (p0 + 0.5) * vec2(work) / n0 - 0.5;
-        vec2 fl = floor(pw);
-        vec2 f = pw - fl;
-        ivec2 i = ivec2(fl);
-        float a = hfgi_stack_fetch(l.source, plane, i, work, wrap);
-        float b = hfgi_stack_fetch(l.source, plane, i + ivec2(1, 0), work, wrap);
-        float c = hfgi_stack_fetch(l.source, plane, i + ivec2(0, 1), work, wrap);
-        float d = hfgi_stack_fetch(l.source, plane, i + ivec2(1, 1), work, wrap);
-        return hfgi_bilerp(a, b, c, d, f);
-    }
+    if (stack_mode) return hfgi_stack_bilinear(l.source, plane, p0, n0, work, wrap);
     return hfgi_bspline_at(l, hfgi_rescale(p0, n0, l), wrap);
 }
 
@@ -67,8 +66,11 @@ struct hfgi_Scan {
 };
 
 // Height at level `level` (hfgi_table) and level-0 position p0.
+// Heights are source 0 (hfgi_scan_begin sets s.l0.source so): a shader reading two pyramids
+// reads the heights' buffers without a per-sample choice or table read.
 float hfgi_height_at(hfgi_Scan s, uint level, vec2 p0) {
     if (s.raw0 && level == 0u) return hfgi_bilinear_at(s.l0, hfgi_rescale(p0, s.n0, s.l0), s.wrap);
+    if (s.stack_mode) return hfgi_stack_bilinear(0u, level, p0, s.n0, s.work, s.wrap);
     return hfgi_pyramid_at(s.l0, hfgi_table[level], level, p0, s.work, s.stack_mode, s.wrap, false);
 }
 
@@ -83,6 +85,7 @@ uint hfgi_scan_level(int i, uint bias, int n_v) {
 hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias, float texel_size, bool stack_mode,
                           bool wrap, uint flags, uint extent, int n_v) {
     hfgi_Level l0 = hfgi_table[0];
+    l0.source = 0u; // the heights
     vec2 n0 = vec2(float(l0.width), float(l0.height));
     vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5;
     return hfgi_Scan(p, n0, work, level_step, level_bias, texel_size, stack_mode, wrap,

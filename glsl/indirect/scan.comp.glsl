@@ -42,6 +42,25 @@ float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_N2];
 uint hfgi_max_ov[HFGI_MAX_LEVELS]; // offsets of the ov levels (hfgi_max.glsl)
 uint hfgi_max_levels;
+// Radiance level 0, read once per receiver (radiance_begin): its size, the scales from level-0
+// height positions to its texels and to the working grid, and its channels' offsets and biases.
+ivec2 hfgi_r0_size;
+vec2 hfgi_r0_raw_scale, hfgi_r0_stack_scale;
+uvec3 hfgi_r0_offset;
+vec3 hfgi_r0_bias;
+
+void radiance_begin(uvec2 work) {
+    hfgi_Level r0 = hfgi_radiance_table[0];
+    vec2 n0 = vec2(float(r0.width), float(r0.height));
+    hfgi_r0_size = ivec2(int(r0.width), int(r0.height));
+    hfgi_r0_raw_scale = vec2(hfgi_r0_size) / n0;
+    hfgi_r0_stack_scale = vec2(work) / n0;
+    for (uint c = 0u; c < 3u; ++c) {
+        hfgi_Level l = hfgi_radiance_table[c * pc.radiance_levels];
+        hfgi_r0_offset[c] = l.offset;
+        hfgi_r0_bias[c] = l.bias;
+    }
+}
 
 // The max pyramid's ov offsets (hfgi_max.glsl), once per receiver; returns the largest height.
 float max_begin(uvec2 n0) {
@@ -96,20 +115,18 @@ vec3 normal_at(vec2 q, bool wrap) {
 // plane (the same values and arithmetic as hfgi_pyramid_at per channel). Pyramid mode (no stack,
 // not raw) reads each channel with hfgi_pyramid_at.
 vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool raw) {
-    hfgi_Level r0 = hfgi_radiance_table[0];
     uint n_u = pc.radiance_levels;
-    vec2 n0 = vec2(float(r0.width), float(r0.height));
     vec3 rad;
     if (!raw && !stack_mode) {
+        hfgi_Level r0 = hfgi_radiance_table[0];
         for (uint c = 0u; c < 3u; ++c) {
             uint e = c * n_u + lv;
             rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap, false);
         }
         return rad;
     }
-    hfgi_Level l = hfgi_radiance_table[lv];
-    ivec2 size = raw ? ivec2(int(l.width), int(l.height)) : ivec2(work);
-    vec2 pw = raw ? hfgi_rescale(q, n0, l) : (q + 0.5) * vec2(work) / n0 - 0.5;
+    ivec2 size = raw ? hfgi_r0_size : ivec2(work);
+    vec2 pw = (q + 0.5) * (raw ? hfgi_r0_raw_scale : hfgi_r0_stack_scale) - 0.5;
     vec2 fl = floor(pw);
     vec2 f = pw - fl;
     ivec2 i = ivec2(fl);
@@ -119,10 +136,10 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
     for (uint c = 0u; c < 3u; ++c) {
         uint e = c * n_u + lv;
         if (raw) {
-            hfgi_Level lc = hfgi_radiance_table[e];
-            uvec4 k = at + lc.offset;
-            rad[c] = hfgi_bilerp(hfgi_radiance_levels[k.x] - lc.bias, hfgi_radiance_levels[k.y] - lc.bias,
-                                 hfgi_radiance_levels[k.z] - lc.bias, hfgi_radiance_levels[k.w] - lc.bias, f);
+            uvec4 k = at + hfgi_r0_offset[c];
+            float b = hfgi_r0_bias[c];
+            rad[c] = hfgi_bilerp(hfgi_radiance_levels[k.x] - b, hfgi_radiance_levels[k.y] - b,
+                                 hfgi_radiance_levels[k.z] - b, hfgi_radiance_levels[k.w] - b, f);
         } else {
             uvec4 k = at + e * work.x * work.y;
             rad[c] = hfgi_bilerp(hfgi_radiance_stack[k.x], hfgi_radiance_stack[k.y], hfgi_radiance_stack[k.z],
@@ -163,9 +180,11 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stac
 }
 
 // Casting-set member (eq. 6) at q with slope tan ω, seen over [running, ω): eq. 12 telescoped.
-void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running_slope, float slope, uint rl, vec2 q,
+// `i`: the ladder sample (or the one a probe precedes), whose radiance level it reads.
+void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running_slope, float slope, int i, vec2 q,
                  vec2 d, hfgi_Scan scan, bool wrap) {
     float omega = atan(slope);
+    uint rl = hfgi_radiance_level[i - scan.first];
     float seg[HFGI_NE];
     hfgi_elevation(running, omega, seg);
     vec3 rad = member_radiance(rl, q, omega, d, scan.work, pc.radiance_stack != 0u, wrap, scan.raw0);
@@ -186,7 +205,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
     // nested: lavapipe pays for an inner loop even when it runs no iteration.
     float t_prev = 0.0, t = 0.0;
     vec2 q = scan.p;
-    uint lv = 0u, rl = 0u;
+    uint lv = 0u;
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
     while (i < scan.end) {
         if (np < 0) {
@@ -194,7 +213,6 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
             q = scan.p + t * d;
             if (!hfgi_scan_inside(scan, q)) break;
             lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-            rl = hfgi_radiance_level[i - scan.first];
             // The max pyramid's bound: nothing past t_prev can rise above the running
             // slope → stop; nothing on level 0 in (t_prev, t] can → no probes, and no
             // sample when it reads level 0. Conservative: the members are the same.
@@ -218,7 +236,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
         vec2 qp = scan.p + tp * d;
         uint lq = probe ? 0u : lv;
         float sp = (hfgi_height_at(scan, lq, qp) - hfgi_base[lq]) / (tp * scan.texel_size);
-        if (sp > running_slope) cast_member(u, running, running_slope, sp, rl, qp, d, scan, wrap);
+        if (sp > running_slope) cast_member(u, running, running_slope, sp, i, qp, d, scan, wrap);
         if (probe) {
             ++s2;
         } else {
@@ -244,6 +262,7 @@ void main() {
     }
     bool bounded = (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
     float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
+    radiance_begin(scan.work);
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;

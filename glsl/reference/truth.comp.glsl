@@ -28,12 +28,12 @@ layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   /
 layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // key-light azimuth samples (φ, weight)
 layout(push_constant) uniform Push { hfgi_TruthPush pc; };
 #include "hfgi_sh.glsl"
+#include "hfgi_address.glsl"
 
 // Index of texel t, clamped to the edge or periodic with wrap.
 uint texel_index(ivec2 t) {
-    int w = int(pc.width), h = int(pc.height);
-    if (pc.wrap != 0u) { t = ivec2(((t.x % w) + w) % w, ((t.y % h) + h) % h); }
-    else { t = clamp(t, ivec2(0), ivec2(w - 1, h - 1)); }
+    bool wrap = pc.wrap != 0u;
+    t = ivec2(hfgi_address(t.x, int(pc.width), wrap), hfgi_address(t.y, int(pc.height), wrap));
     return uint(t.y) * pc.width + uint(t.x);
 }
 

@@ -34,14 +34,14 @@ layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  //
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
+#include "hfgi_address.glsl"
 
 float height(int x, int y) {
     return hfgi_levels[uint(y) * pc.width + uint(x)];
 }
 
 int wrap_or_clamp(int p, int n) {
-    if (pc.wrap != 0u) { int m = p % n; return m < 0 ? m + n : m; }
-    return clamp(p, 0, n - 1);
+    return hfgi_address(p, n, pc.wrap != 0u);
 }
 
 // CONVENTIONS.md normals: central differences inside, one-sided at the border (periodic with wrap).

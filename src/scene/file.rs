@@ -33,8 +33,9 @@ use crate::error::{Error, Result};
 use crate::scene::animated::{Animation, Boundary, BumpParams, BumpShape, Rain, WaterParams};
 use crate::scene::envmap::{self, Preset};
 use crate::scene::generators::Generator;
+use crate::scene::geotiff::{NoData, TiffMeta};
 use crate::scene::heightfield::DEFAULT_MAX_DIM;
-use crate::scene::load::{load_heightfield, LoadOptions};
+use crate::scene::load::{load_heightfield_meta, LoadOptions};
 use crate::scene::model::{
     Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Quality,
     Scene,
@@ -188,6 +189,7 @@ struct RawHeightfield {
     height_scale: Option<f64>,
     height_offset: Option<f64>,
     wrap: Option<bool>,
+    nodata: Option<toml::Value>,
 }
 
 #[derive(Deserialize, Default)]
@@ -551,10 +553,11 @@ impl Ctx<'_> {
 
     fn heightfield(&self, t: Option<&Table>) -> Result<(HeightField, f64, bool)> {
         let raw: RawHeightfield = self.de_opt(t, "heightfield")?;
-        let texel = raw.texel_size.unwrap_or(1.0);
+        let mut texel = raw.texel_size.unwrap_or(1.0);
         if !(texel.is_finite() && texel > 0.0) {
             return Err(self.invalid("heightfield.texel_size", texel, "a finite number > 0"));
         }
+        let nodata = self.nodata(raw.nodata.as_ref())?;
         let scale = raw.height_scale.unwrap_or(1.0);
         self.finite_f32("heightfield.height_scale", scale, true, "a finite number")?;
         let field = match (raw.generator, raw.file) {
@@ -576,8 +579,14 @@ impl Ctx<'_> {
                     height_scale: scale as f32,
                     raw_size: raw.raw_size.map(|s| (s.0, s.1)),
                     max_dim: DEFAULT_MAX_DIM,
+                    nodata,
                 };
-                load_heightfield(&path, &opts).map_err(|e| self.wrap("heightfield.file", e))?
+                let (field, meta) =
+                    load_heightfield_meta(&path, &opts).map_err(|e| self.wrap("heightfield.file", e))?;
+                if raw.texel_size.is_none() {
+                    texel = self.pixel_scale(&meta)?.unwrap_or(texel);
+                }
+                field
             }
             (generator, None) => {
                 if raw.raw_size.is_some() {
@@ -619,6 +628,42 @@ impl Ctx<'_> {
             }
         };
         Ok((field, texel, raw.wrap.unwrap_or(false)))
+    }
+
+    /// `heightfield.nodata`: `"reject"` (default), `"lowest"` or a fill value (file units).
+    fn nodata(&self, v: Option<&toml::Value>) -> Result<NoData> {
+        const EXPECTED: &str = "\"reject\", \"lowest\" or a fill value (a finite number, in the file's units)";
+        match v {
+            None => Ok(NoData::Reject),
+            Some(toml::Value::String(s)) if s == "reject" => Ok(NoData::Reject),
+            Some(toml::Value::String(s)) if s == "lowest" => Ok(NoData::Lowest),
+            Some(toml::Value::Integer(i)) => Ok(NoData::Value(*i as f32)),
+            Some(toml::Value::Float(x)) => {
+                self.finite_f32("heightfield.nodata", *x, true, EXPECTED)?;
+                Ok(NoData::Value(*x as f32))
+            }
+            Some(other) => Err(self.invalid("heightfield.nodata", other, EXPECTED)),
+        }
+    }
+
+    /// The texel size a GeoTIFF's `ModelPixelScaleTag` gives (`None`: no tag), when the scene
+    /// does not set `heightfield.texel_size`: square pixels, in a projected model's units.
+    fn pixel_scale(&self, meta: &TiffMeta) -> Result<Option<f64>> {
+        let Some([sx, sy]) = meta.pixel_scale else { return Ok(None) };
+        let given = "set heightfield.texel_size (world units per texel) to override";
+        if meta.geographic {
+            return Err(self.err(
+                Some("heightfield.texel_size"),
+                format!("the GeoTIFF's pixel scale ({sx} × {sy}) is in degrees (a geographic model); {given}"),
+            ));
+        }
+        if (sx - sy).abs() > 1e-6 * sx.max(sy) {
+            return Err(self.err(
+                Some("heightfield.texel_size"),
+                format!("the GeoTIFF's pixels are not square ({sx} × {sy}); hfgi needs square texels; {given}"),
+            ));
+        }
+        Ok(Some(sx))
     }
 
     fn material(&self, t: Option<&Table>, field: &HeightField) -> Result<Material> {

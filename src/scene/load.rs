@@ -9,6 +9,8 @@
 //!   other colour type (gray + alpha, RGB, RGBA, palette) is rejected.
 //! - `.exr`: the first of the channels `Y`, `R`, `height` (in that order of preference) of the
 //!   first layer (part) that has one; samples f16 or f32 (u32 is rejected).
+//! - `.tif`, `.tiff`: a single-band GeoTIFF DEM, values as stored (`crate::scene::geotiff`:
+//!   sample types, compressions, the pixel-scale and NoData tags).
 //! - `.raw`, `.f32`: headerless little-endian f32, row-major; the size comes from
 //!   [`LoadOptions::raw_size`] and the file must be exactly `4·w·h` bytes.
 //!
@@ -24,11 +26,12 @@ use image::codecs::png::{PngDecoder, PngEncoder};
 use image::{ColorType, ExtendedColorType, ImageDecoder, ImageEncoder};
 
 use crate::error::{Error, Result};
+pub use crate::scene::geotiff::{NoData, TiffMeta};
 use crate::scene::heightfield::{HeightField, DEFAULT_MAX_DIM};
 
 /// Extensions understood by [`load_heightfield`], for messages.
-pub const SUPPORTED_EXTENSIONS: &str =
-    ".png (8- or 16-bit grayscale), .exr (channel Y, R or height; f16 or f32), .raw / .f32 (little-endian f32, needs raw_size)";
+pub const SUPPORTED_EXTENSIONS: &str = ".png (8- or 16-bit grayscale), .exr (channel Y, R or height; f16 or f32), \
+     .tif / .tiff (single-band GeoTIFF DEM), .raw / .f32 (little-endian f32, needs raw_size)";
 
 /// EXR channels tried for the heights, in order of preference.
 pub const EXR_HEIGHT_CHANNELS: [&str; 3] = ["Y", "R", "height"];
@@ -45,11 +48,13 @@ pub struct LoadOptions {
     /// Largest accepted side (the device's `maxImageDimension2D`). Default
     /// [`DEFAULT_MAX_DIM`].
     pub max_dim: u32,
+    /// GeoTIFF samples equal to the file's NoData value: an error (the default) or filled.
+    pub nodata: NoData,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        Self { height_scale: 1.0, raw_size: None, max_dim: DEFAULT_MAX_DIM }
+        Self { height_scale: 1.0, raw_size: None, max_dim: DEFAULT_MAX_DIM, nodata: NoData::Reject }
     }
 }
 
@@ -61,6 +66,12 @@ impl Default for LoadOptions {
 /// naming the position of the first one), [`Error::InvalidParameter`] (non-finite
 /// `height_scale`, missing `raw_size`).
 pub fn load_heightfield(path: &Path, opts: &LoadOptions) -> Result<HeightField> {
+    Ok(load_heightfield_meta(path, opts)?.0)
+}
+
+/// [`load_heightfield`], with what a GeoTIFF says besides its samples (the default
+/// [`TiffMeta`] for the other formats).
+pub fn load_heightfield_meta(path: &Path, opts: &LoadOptions) -> Result<(HeightField, TiffMeta)> {
     if !opts.height_scale.is_finite() {
         return Err(Error::param("height_scale", opts.height_scale, "a finite number"));
     }
@@ -69,6 +80,7 @@ pub fn load_heightfield(path: &Path, opts: &LoadOptions) -> Result<HeightField> 
         Some("png") => load_png,
         Some("exr") => load_exr,
         Some("raw") | Some("f32") => load_raw,
+        Some("tif") | Some("tiff") => return crate::scene::geotiff::load_tiff(path, opts),
         Some(other) => {
             return Err(Error::format(
                 path,
@@ -77,11 +89,11 @@ pub fn load_heightfield(path: &Path, opts: &LoadOptions) -> Result<HeightField> 
         }
         None => return Err(Error::format(path, format!("no file extension; supported: {SUPPORTED_EXTENSIONS}"))),
     };
-    loader(path, opts)
+    Ok((loader(path, opts)?, TiffMeta::default()))
 }
 
 /// The file's length in bytes; [`Error::Format`] if it is empty or not a regular file.
-fn nonempty_len(path: &Path) -> Result<u64> {
+pub(crate) fn nonempty_len(path: &Path) -> Result<u64> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
         return Err(Error::format(path, "not a regular file"));
@@ -92,7 +104,7 @@ fn nonempty_len(path: &Path) -> Result<u64> {
     Ok(meta.len())
 }
 
-fn check_size(path: &Path, width: usize, height: usize, max_dim: u32) -> Result<()> {
+pub(crate) fn check_size(path: &Path, width: usize, height: usize, max_dim: u32) -> Result<()> {
     let max = max_dim as usize;
     if width < 2 || height < 2 || width > max || height > max {
         return Err(Error::FieldSize { source_name: path.display().to_string(), width, height, max: max_dim });
@@ -101,7 +113,13 @@ fn check_size(path: &Path, width: usize, height: usize, max_dim: u32) -> Result<
 }
 
 /// Validates the scaled samples into a [`HeightField`] named after `path`.
-fn finish(path: &Path, width: usize, height: usize, mut data: Vec<f32>, opts: &LoadOptions) -> Result<HeightField> {
+pub(crate) fn finish(
+    path: &Path,
+    width: usize,
+    height: usize,
+    mut data: Vec<f32>,
+    opts: &LoadOptions,
+) -> Result<HeightField> {
     if opts.height_scale != 1.0 {
         for v in &mut data {
             *v *= opts.height_scale;
@@ -111,7 +129,7 @@ fn finish(path: &Path, width: usize, height: usize, mut data: Vec<f32>, opts: &L
 }
 
 /// Runs a third-party decoder, turning a panic inside it into [`Error::Format`].
-fn guarded<T>(path: &Path, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+pub(crate) fn guarded<T>(path: &Path, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
     catch_unwind(AssertUnwindSafe(f))
         .unwrap_or_else(|_| Err(Error::format(path, format!("{what} decoder failed (corrupt file)"))))
 }

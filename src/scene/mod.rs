@@ -3,6 +3,7 @@ pub mod animated;
 pub mod envmap;
 pub mod file;
 pub mod generators;
+pub mod geotiff;
 pub mod heightfield;
 pub mod load;
 pub mod model;

@@ -259,7 +259,7 @@ impl GiSettings {
         // (n, m, k, o, sub-sampling, k_u, o_u, near steps, radial probes: first bounce, later)
         let (n, m, k, o, sub, ku, ou, near, probes) = match q {
             Quality::Draft => (4, 16, 2, 4, 2, 2, 2, 2, (0, 0)),
-            Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4, (0, 0)),
+            Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4, (2, 0)),
             Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0, (0, 0)),
             Quality::High => (6, 64, 12, 8, 1, 8, 6, 16, (4, 0)),
             Quality::Ultra => (8, 128, 24, 8, 1, 16, 8, 64, (0, 0)),

@@ -294,8 +294,13 @@ fn settings_label(g: &GiSettings) -> String {
     } else {
         format!(" l0={} hz={} near={} reach={} ωmin={}", g.level0, g.horizon, g.near_steps, g.scan_reach, g.omega_min)
     };
+    let probes = if g.radial_probes > 0 || g.radial_probes_later > 0 {
+        format!(" probes={}/{}", g.radial_probes, g.radial_probes_later)
+    } else {
+        String::new()
+    };
     format!(
-        "n={} m={} k={} o={} s={} {} {} b={}{fixes}",
+        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}",
         g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
 }

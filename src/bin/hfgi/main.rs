@@ -602,7 +602,7 @@ fn animate(a: AnimateArgs) -> Result<()> {
 fn load_field(a: &PyramidArgs, max_dim: u32) -> Result<HeightField> {
     if let Some(path) = &a.heights {
         let raw_size = a.raw_size.as_deref().map(|s| parse_size(s, "--raw-size")).transpose()?;
-        let opts = LoadOptions { height_scale: a.height_scale, raw_size, max_dim };
+        let opts = LoadOptions { height_scale: a.height_scale, raw_size, max_dim, ..LoadOptions::default() };
         return load_heightfield(path, &opts).with_context(|| format!("loading height field {}", path.display()));
     }
     let (w, h) = parse_size(&a.size, "--size")?;
