@@ -6,7 +6,8 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 
 use hfgi::scene::file::load_scene;
-use hfgi::scene::load::{load_heightfield, LoadOptions, NoData};
+use hfgi::scene::load::{load_heightfield, save_raw, LoadOptions, NoData};
+use hfgi::scene::HeightField;
 use tiff::encoder::{colortype, Compression, DeflateLevel, TiffEncoder, TiffValue};
 use tiff::tags::Tag;
 
@@ -181,6 +182,13 @@ fn nodata_is_rejected_with_its_position_or_filled() {
     std::fs::write(d.join("s.toml"), "[heightfield]\nfile = \"holes.tif\"\nnodata = \"zero\"\n").unwrap();
     let e = format!("{:#}", load_scene(&d.join("s.toml"), &[]).unwrap_err());
     assert!(e.contains("heightfield.nodata") && e.contains("lowest"), "{e}");
+    // Only for GeoTIFFs: with another format or a generator it is an error, not ignored.
+    save_raw(&HeightField::new("t", 2, 2, vec![0.0; 4], 64).unwrap(), &d.join("h.f32")).unwrap();
+    for source in ["file = \"h.f32\"\nraw_size = 2", "generator = \"fbm\"\nsize = 8"] {
+        std::fs::write(d.join("s.toml"), format!("[heightfield]\n{source}\nnodata = \"lowest\"\n")).unwrap();
+        let e = format!("{:#}", load_scene(&d.join("s.toml"), &[]).unwrap_err());
+        assert!(e.contains("heightfield.nodata applies to GeoTIFF files"), "{e}");
+    }
 
     // NaN as NoData in a float DEM, and the f32 form of GDAL's usual -3.4028234663852886e+38.
     let mut f32s: Vec<f32> = ramp().iter().map(|&v| v as f32).collect();

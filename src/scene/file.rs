@@ -178,6 +178,8 @@ struct RawScene {
     animation: Option<Table>,
 }
 
+const NODATA_TIFF_ONLY: &str = "heightfield.nodata applies to GeoTIFF files (.tif/.tiff) only";
+
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 struct RawHeightfield {
@@ -575,6 +577,10 @@ impl Ctx<'_> {
                     ));
                 }
                 let path = self.resolve(&file);
+                let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+                if raw.nodata.is_some() && !matches!(ext.as_deref(), Some("tif") | Some("tiff")) {
+                    return Err(self.err(Some("heightfield.nodata"), NODATA_TIFF_ONLY));
+                }
                 let opts = LoadOptions {
                     height_scale: scale as f32,
                     raw_size: raw.raw_size.map(|s| (s.0, s.1)),
@@ -589,6 +595,9 @@ impl Ctx<'_> {
                 field
             }
             (generator, None) => {
+                if raw.nodata.is_some() {
+                    return Err(self.err(Some("heightfield.nodata"), NODATA_TIFF_ONLY));
+                }
                 if raw.raw_size.is_some() {
                     return Err(self.err(
                         Some("heightfield.raw_size"),
