@@ -420,13 +420,7 @@ fn sixty_water_frames_through_the_renderer() {
     assert!(change > 1e-3, "the shading did not change over 60 frames ({change})");
 
     // A frame without new heights does not rebuild the pyramid.
-    let stages = ctx
-        .submit_and_wait(|cmd| {
-            let mut rec = Recorder::new(&ctx, cmd, None);
-            renderer.record(&mut rec);
-            Ok(rec.stages().to_vec())
-        })
-        .unwrap();
+    let stages = common::record_frame(&ctx, &mut renderer);
     assert!(!stages.iter().any(|s| s == STAGE_DECIMATE), "rebuilt without a change: {stages:?}");
     assert_eq!((renderer.stats().frames, renderer.stats().pyramid_builds), (61, 60));
     assert_eq!(ctx.pipelines_created(), before);

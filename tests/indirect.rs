@@ -13,13 +13,7 @@ use hfgi::vk::{Context, Recorder};
 
 fn render_gpu(ctx: &Context, scene: &Scene) -> (ShadingLayers, Vec<String>) {
     let mut r = Renderer::new(ctx, scene).unwrap();
-    let stages = ctx
-        .submit_and_wait(|cmd| {
-            let mut rec = Recorder::new(ctx, cmd, None);
-            r.record(&mut rec);
-            Ok(rec.stages().to_vec())
-        })
-        .unwrap();
+    let stages = common::record_frame(ctx, &mut r);
     let layers = r.read_layers(ctx).unwrap();
     r.destroy(ctx);
     (layers, stages)

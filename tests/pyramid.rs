@@ -151,13 +151,7 @@ fn max_pyramid_equals_its_twin_exactly() {
     scene.gi.bounces = 1;
     scene.gi.radial_probes = 2;
     let mut r = hfgi::frame::Renderer::new(&ctx, &scene).unwrap();
-    let stages = ctx
-        .submit_and_wait(|cmd| {
-            let mut rec = Recorder::new(&ctx, cmd, None);
-            r.record(&mut rec);
-            Ok(rec.stages().to_vec())
-        })
-        .unwrap();
+    let stages = common::record_frame(&ctx, &mut r);
     assert!(stages.iter().any(|s| s == "pyramid.max"), "{stages:?}");
     let max = r.indirect.as_ref().and_then(|i| i.max.as_ref()).expect("the scene uses the bound");
     let gpu_data = max.read(&ctx).unwrap();

@@ -65,13 +65,7 @@ void radiance_begin(uvec2 work) {
 // The max pyramid's ov offsets (hfgi_max.glsl), once per receiver; returns the largest height.
 float max_begin(uvec2 n0) {
     hfgi_max_levels = hfgi_max_count(n0);
-    uint total = 0u;
-    for (uint l = 0u; l < hfgi_max_levels; ++l) {
-        uvec2 s = hfgi_max_size(n0, l);
-        hfgi_max_ov[l] = total;
-        total += s.x * s.y;
-    }
-    for (uint l = 0u; l < hfgi_max_levels; ++l) hfgi_max_ov[l] += total;
+    for (uint l = 0u; l < hfgi_max_levels; ++l) hfgi_max_ov[l] = hfgi_max_offset(n0, l, true);
     return hfgi_max[hfgi_max_ov[hfgi_max_levels - 1u]];
 }
 

@@ -90,6 +90,17 @@ pub fn render_layers(ctx: &Context, scene: &hfgi::scene::model::Scene) -> hfgi::
     render_with(ctx, scene, |ctx, r| r.read_layers(ctx).unwrap())
 }
 
+/// Records one frame of `r` into one command buffer, submits it and waits; returns the stages
+/// recorded.
+pub fn record_frame(ctx: &Context, r: &mut hfgi::frame::Renderer) -> Vec<String> {
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(ctx, cmd, None);
+        r.record(&mut rec);
+        Ok(rec.stages().to_vec())
+    })
+    .unwrap()
+}
+
 /// Records one frame of `scene` into one submit and waits, then returns what `read` reads back
 /// from the renderer (before it is destroyed).
 pub fn render_with<T>(
@@ -98,12 +109,7 @@ pub fn render_with<T>(
     read: impl FnOnce(&Context, &hfgi::frame::Renderer) -> T,
 ) -> T {
     let mut r = hfgi::frame::Renderer::new(ctx, scene).unwrap();
-    ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(ctx, cmd, None);
-        r.record(&mut rec);
-        Ok(())
-    })
-    .unwrap();
+    record_frame(ctx, &mut r);
     let out = read(ctx, &r);
     r.destroy(ctx);
     out
