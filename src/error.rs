@@ -78,10 +78,67 @@ impl Error {
         Error::Format { path: path.into(), what: what.into() }
     }
 
-    /// A parameter error: `name` had `value`, `expected` says what is valid.
+    /// A parameter error: `name` had `value`, `expected` says what is valid. The value is
+    /// echoed [`shorten`]ed.
     pub fn param(name: impl Into<String>, value: impl std::fmt::Display, expected: impl Into<String>) -> Self {
-        Error::InvalidParameter { name: name.into(), value: value.to_string(), expected: expected.into() }
+        Error::InvalidParameter { name: name.into(), value: shorten(&value.to_string()), expected: expected.into() }
     }
+}
+
+/// Longest text a message echoes back from the input (characters); longer text is cut.
+pub const ECHO_MAX_CHARS: usize = 120;
+
+/// Longest line of a message (characters); longer lines are cut.
+pub const LINE_MAX_CHARS: usize = 1000;
+
+/// `text` with every line longer than `max` characters cut there (a TOML syntax error quotes
+/// its whole line: a scene with a 200 KB line would be echoed whole). The CLI passes every
+/// message through it with [`LINE_MAX_CHARS`].
+pub fn shorten_lines(text: &str, max: usize) -> String {
+    let lines: Vec<String> = text
+        .split('\n')
+        .map(|l| {
+            let count = l.chars().count();
+            if count > max {
+                format!("{}… ({count} characters in all)", l.chars().take(max).collect::<String>())
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    lines.join("\n")
+}
+
+/// Text echoed back in a message, kept short (docs/robustness.md, "Messages"): every number
+/// written with more than 12 characters (`1e300` printed by `f64`'s `Display` is 301 digits) is
+/// rewritten with 6 significant digits (`1.00000e300`), and text still longer than
+/// [`ECHO_MAX_CHARS`] characters is cut there with `… (N characters in all)`.
+pub fn shorten(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4 * ECHO_MAX_CHARS));
+    let mut token = String::new();
+    let flush = |token: &mut String, out: &mut String| {
+        match token.parse::<f64>() {
+            Ok(v) if token.len() > 12 && v.is_finite() => out.push_str(&format!("{v:.5e}")),
+            _ => out.push_str(token),
+        }
+        token.clear();
+    };
+    for c in text.chars() {
+        let numeric = c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E');
+        if numeric && !(token.is_empty() && matches!(c, 'e' | 'E')) {
+            token.push(c);
+        } else {
+            flush(&mut token, &mut out);
+            out.push(c);
+        }
+    }
+    flush(&mut token, &mut out);
+    let count = out.chars().count();
+    if count > ECHO_MAX_CHARS {
+        let cut: String = out.chars().take(ECHO_MAX_CHARS).collect();
+        return format!("{cut}… ({count} characters in all)");
+    }
+    out
 }
 
 /// Maps a `vk::Result` into [`Error::Vulkan`] naming the call.

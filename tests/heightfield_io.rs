@@ -820,3 +820,41 @@ fn gray_normalized_png() {
     let img = image::ImageReader::open(&path).unwrap().decode().unwrap();
     assert_eq!(img.to_luma8().into_raw(), vec![128; 4]);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Inputs found by fuzzing (docs/robustness.md, "Fuzzing"; the files are also fuzz seeds)
+
+/// A 613-byte B44-compressed tiled EXR (channels Y, Z; 8×8) whose block makes exr's B44 decoder
+/// subtract with overflow: a panic where overflow checks are on (tests, debug builds). exr ran
+/// its decompressors on its rayon pool, where a panic aborts the whole process past the loaders'
+/// `catch_unwind`; both EXR readers now decompress on the calling thread, so the panic is a
+/// corrupt-file error (and without overflow checks the decoder wraps, as OpenEXR's does).
+#[test]
+fn fuzz_exr_decoder_panic_is_an_error_not_an_abort() {
+    let dir = tmp();
+    let path = dir.path().join("b44.exr");
+    std::fs::write(&path, include_bytes!("../fuzz/seeds/heights_exr/crash-b44-overflow.exr")).unwrap();
+    match load_heightfield(&path, &opts()) {
+        Ok(f) => assert_eq!((f.width(), f.height()), (8, 8)),
+        Err(e) => assert_msg(&e.to_string(), &path, &[]),
+    }
+    if let Err(e) = read_layers(&path) {
+        assert_msg(&e.to_string(), &path, &[]);
+    }
+    // No R, G, B: an error either way, but not an abort.
+    let e = hfgi::scene::envmap::load_equirect_exr(&path).unwrap_err();
+    assert_msg(&e.to_string(), &path, &[]);
+}
+
+/// A 487-byte EXR whose data window is 1073741815×4 pixels (3 f16 channels): exr allocates every
+/// channel at the claimed size before decoding, and the environment-map loader took more than
+/// 8 GB. The header is now checked against `MAX_ENV_SAMPLES` first.
+#[test]
+fn fuzz_envmap_claiming_a_huge_size_is_rejected_before_allocating() {
+    let dir = tmp();
+    let path = dir.path().join("huge.exr");
+    std::fs::write(&path, include_bytes!("../fuzz/seeds/envmap_exr/oom-huge-data-window.exr")).unwrap();
+    let e = hfgi::scene::envmap::load_equirect_exr(&path).unwrap_err();
+    assert!(matches!(e, Error::Format { .. }), "{e:?}");
+    assert_msg(&e.to_string(), &path, &["1073741815×4", "3 channel(s)", "samples"]);
+}

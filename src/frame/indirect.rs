@@ -52,6 +52,49 @@ pub struct IndirectPass {
     shade_push: ShadePush,
 }
 
+/// What the scan uploads, from the scene: the environment set's azimuth samples
+/// (`[cos φ, sin φ, 0, 0]`), its folded wedge matrices and the scan's step ladder for `n_v`
+/// height levels (one source for the pass and [`crate::frame::memory`]).
+pub(crate) struct ScanData {
+    pub samples: Vec<[f32; 4]>,
+    pub fold: Vec<f32>,
+    pub ladder: Vec<f64>,
+}
+
+impl ScanData {
+    pub(crate) fn new(scene: &Scene, n_v: usize) -> Self {
+        let gi = &scene.gi;
+        let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
+        let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
+        let fold = super::shared::gpu_fold(gi.sh_order, &set, gi);
+        let ladder = scan_steps(gi, n_v);
+        Self { samples, fold, ladder }
+    }
+}
+
+/// The pass's own buffers `(name, bytes)` in creation order (each at least 16 bytes), for a
+/// `work` grid and [`ScanData`] of `samples` samples, `fold` floats and `ladder` steps.
+pub(crate) fn buffer_sizes(
+    scene: &Scene,
+    work: (u32, u32),
+    samples: usize,
+    fold: usize,
+    ladder: usize,
+) -> [(&'static str, u64); 6] {
+    let n = scene.gi.sh_order;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let u_bytes = (work.0 as u64 * work.1 as u64) * (n * n) as u64 * 16;
+    [
+        ("hfgi.indirect.samples", samples as u64 * 16),
+        ("hfgi.indirect.fold", fold as u64 * 4),
+        ("hfgi.indirect.radiance_level", ladder as u64 * 4),
+        ("hfgi.indirect.u", u_bytes),
+        ("hfgi.indirect.bounce", (2 * w * h * 16) as u64),
+        ("hfgi.indirect.incident", if vector_pyramid(scene) { (w * h * n * n * 16) as u64 } else { 16 }),
+    ]
+    .map(|(name, size)| (name, size.max(16)))
+}
+
 const U: usize = 3;
 const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
@@ -63,10 +106,7 @@ impl IndirectPass {
         let (w, h) = (scene.field.width(), scene.field.height());
         let (ww, wh) = pyramid.work();
         let vector = vector_pyramid(scene);
-        let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
-        let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
-        let fold = super::shared::gpu_fold(n, &set, gi);
-        let ladder = scan_steps(gi, pyramid.layout().count());
+        let ScanData { samples, fold, ladder } = ScanData::new(scene, pyramid.layout().count());
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -75,16 +115,8 @@ impl IndirectPass {
         let mut radiance = None;
         let mut max = None;
         let made = (|| -> Result<(vk::DescriptorSet, vk::DescriptorSet)> {
-            let u_bytes = (ww as u64 * wh as u64) * (n * n) as u64 * 16;
-            for (name, size) in [
-                ("hfgi.indirect.samples", samples.len() as u64 * 16),
-                ("hfgi.indirect.fold", fold.len() as u64 * 4),
-                ("hfgi.indirect.radiance_level", ladder.len() as u64 * 4),
-                ("hfgi.indirect.u", u_bytes),
-                ("hfgi.indirect.bounce", (2 * w * h * 16) as u64),
-                ("hfgi.indirect.incident", if vector { (w * h * n * n * 16) as u64 } else { 16 }),
-            ] {
-                bufs.push(Buffer::new(ctx, name, size.max(16), usage, MemoryLocation::GpuOnly)?);
+            for (name, size) in buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len()) {
+                bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
             }
             let rad = radiance.insert(RadiancePyramid::new(
                 ctx,

@@ -3,6 +3,7 @@
 //! [`crate::reference`].
 
 pub mod indirect;
+pub mod memory;
 pub mod plan;
 pub mod pyramid;
 pub mod pyramid_max;

@@ -125,6 +125,81 @@ fn table_entries(layout: &PyramidLayout, kind: PyramidKind, origin: f32) -> Vec<
         .collect()
 }
 
+/// The name of a pyramid buffer: `hfgi.{label}.{part}` (`part`: `levels`, `table`, `stack`).
+pub(crate) fn buffer_name(kind: PyramidKind, part: &str) -> String {
+    format!("hfgi.{}.{part}", kind.label)
+}
+
+/// The buffers [`HeightPyramid::with_kind`] creates, in bytes as requested, after the same
+/// checks (one source for the pass and [`crate::frame::memory`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct PyramidBuffers {
+    pub layout: PyramidLayout,
+    /// `hfgi.{label}.levels`: every channel's levels, `f32`.
+    pub levels: u64,
+    /// `hfgi.{label}.table`: one [`GpuLevel`] per channel and level.
+    pub table: u64,
+    /// `hfgi.{label}.stack`: stack mode only, `channels · n_v` planes of `work`, `f32`.
+    pub stack: Option<u64>,
+}
+
+impl PyramidBuffers {
+    /// The sizes for [`HeightPyramid::with_kind`]'s arguments, or its error. `max_dimension`:
+    /// the device's `maxImageDimension2D` (`None`: not checked, as without a device).
+    pub(crate) fn new(
+        width: usize,
+        height: usize,
+        work: (usize, usize),
+        k_v: u32,
+        mode: PyramidMode,
+        kind: PyramidKind,
+        max_dimension: Option<usize>,
+    ) -> Result<Self> {
+        let layout = PyramidLayout::new(width, height, k_v)?;
+        let channels = kind.channels.max(1) as u64;
+        let table_len = table_entries(&layout, kind, 0.0).len();
+        if channels * layout.total > u32::MAX as u64 {
+            return Err(Error::param(
+                "pyramid size",
+                format!("{width}×{height}×{channels}"),
+                "fewer than 2^32 samples in all levels",
+            ));
+        }
+        if let Some(max) = max_dimension.filter(|&m| width > m || height > m) {
+            return Err(Error::FieldSize { source_name: "pyramid".into(), width, height, max: max as u32 });
+        }
+        if work.0 < 2 || work.1 < 2 || work.0 > width.max(2) || work.1 > height.max(2) {
+            return Err(Error::param(
+                "working resolution",
+                format!("{}×{}", work.0, work.1),
+                format!("2×2 up to {width}×{height}"),
+            ));
+        }
+        let plane = (work.0 * work.1) as u64;
+        let stack_floats = plane * layout.count() as u64 * channels;
+        if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
+            return Err(Error::param(
+                "gi.pyramid",
+                "stack",
+                format!("`pyramid` for a {width}×{height} field (the stack would hold {stack_floats} floats, more than 2^32)"),
+            ));
+        }
+        Ok(Self {
+            levels: layout.total * 4 * channels,
+            table: (table_len * std::mem::size_of::<GpuLevel>()) as u64,
+            stack: (mode == PyramidMode::Stack).then_some(stack_floats * 4),
+            layout,
+        })
+    }
+
+    /// `(name, bytes)` of every buffer, in creation order.
+    pub(crate) fn named(&self, kind: PyramidKind) -> Vec<(String, u64)> {
+        let mut out = vec![(buffer_name(kind, "levels"), self.levels), (buffer_name(kind, "table"), self.table)];
+        out.extend(self.stack.map(|b| (buffer_name(kind, "stack"), b)));
+        out
+    }
+}
+
 /// The height pyramid pass and its buffers. The same pass builds the RGB radiance pyramid
 /// ([`PyramidKind`] with 3 channels): channel `c` of level `i` is table entry `c·n_v + i`, at
 /// float offset `c·total + offset_i`, and stack plane `c·n_v + i`.
@@ -172,54 +247,28 @@ impl HeightPyramid {
         wrap: bool,
         kind: PyramidKind,
     ) -> Result<Self> {
-        let layout = PyramidLayout::new(width, height, k_v)?;
-        let channels = kind.channels.max(1) as u64;
-        let table_entries = table_entries(&layout, kind, 0.0);
-        if channels * layout.total > u32::MAX as u64 {
-            return Err(Error::param(
-                "pyramid size",
-                format!("{width}×{height}×{channels}"),
-                "fewer than 2^32 samples in all levels",
-            ));
-        }
         let max = ctx.info().max_image_dimension_2d as usize;
-        if width > max || height > max {
-            return Err(Error::FieldSize { source_name: "pyramid".into(), width, height, max: max as u32 });
-        }
+        let sizes = PyramidBuffers::new(width, height, work, k_v, mode, kind, Some(max))?;
+        let layout = sizes.layout.clone();
+        let table_entries = table_entries(&layout, kind, 0.0);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
-        if work.0 < 2 || work.1 < 2 || work.0 > width.max(2) || work.1 > height.max(2) {
-            return Err(Error::param(
-                "working resolution",
-                format!("{}×{}", work.0, work.1),
-                format!("2×2 up to {width}×{height}"),
-            ));
-        }
-        let plane = (work.0 * work.1) as u64;
-        let stack_floats = plane * layout.count() as u64 * channels;
-        if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
-            return Err(Error::param(
-                "gi.pyramid",
-                "stack",
-                format!("`pyramid` for a {width}×{height} field (the stack would hold {stack_floats} floats, more than 2^32)"),
-            ));
-        }
         let (mut levels, mut table, mut stack) = (None, None, None);
         let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
         let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
         let made = (|| -> Result<()> {
             let lv = levels.insert(Buffer::new(
                 ctx,
-                &format!("hfgi.{}.levels", kind.label),
-                layout.total * 4 * channels,
+                &buffer_name(kind, "levels"),
+                sizes.levels,
                 storage,
                 MemoryLocation::GpuOnly,
             )?);
             let tb = table.insert(Buffer::new(
                 ctx,
-                &format!("hfgi.{}.table", kind.label),
-                (table_entries.len() * std::mem::size_of::<GpuLevel>()) as u64,
+                &buffer_name(kind, "table"),
+                sizes.table,
                 storage,
                 MemoryLocation::GpuOnly,
             )?);
@@ -233,11 +282,11 @@ impl HeightPyramid {
                 1,
             )?);
             sets.0 = d.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb)])?;
-            if mode == PyramidMode::Stack {
+            if let Some(stack_bytes) = sizes.stack {
                 let st = stack.insert(Buffer::new(
                     ctx,
-                    &format!("hfgi.{}.stack", kind.label),
-                    stack_floats * 4,
+                    &buffer_name(kind, "stack"),
+                    stack_bytes,
                     storage,
                     MemoryLocation::GpuOnly,
                 )?);

@@ -45,6 +45,14 @@ pub fn why_no_max_bound(scene: &Scene) -> Option<&'static str> {
     }
 }
 
+/// The name of the pass's buffer.
+pub(crate) const BUFFER_NAME: &str = "hfgi.pyramid.max";
+
+/// Bytes of the pass's buffer for `layout` ([`MaxLayout::floats`] `f32`).
+pub(crate) fn buffer_bytes(layout: &MaxLayout) -> u64 {
+    layout.floats() as u64 * 4
+}
+
 pub struct MaxPyramid {
     layout: MaxLayout,
     pipeline: ComputePipeline,
@@ -58,7 +66,7 @@ impl MaxPyramid {
         let l0 = pyramid.layout().levels[0];
         let layout = MaxLayout::new(l0.width as usize, l0.height as usize);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        let buffer = Buffer::new(ctx, "hfgi.pyramid.max", layout.floats() as u64 * 4, usage, MemoryLocation::GpuOnly)?;
+        let buffer = Buffer::new(ctx, BUFFER_NAME, buffer_bytes(&layout), usage, MemoryLocation::GpuOnly)?;
         let binds =
             [Bind::Buffer(pyramid.levels_buffer()), Bind::Buffer(pyramid.table_buffer()), Bind::Buffer(&buffer)];
         let push_size = std::mem::size_of::<PyramidPush>() as u32;

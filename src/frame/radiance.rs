@@ -34,6 +34,15 @@ pub fn radiance_kind(channels: u32) -> PyramidKind {
     }
 }
 
+/// Channels and storage mode of a radiance pyramid: 3 channels in the scene's `mode`, or for
+/// the glossy vector pyramid (`vector_n2 = Some(n²)`) `3 + 3n²` channels, always a true pyramid.
+pub(crate) fn shape(mode: PyramidMode, vector_n2: Option<u32>) -> (u32, PyramidMode) {
+    match vector_n2 {
+        Some(n2) => (3 + 3 * n2, PyramidMode::Pyramid),
+        None => (3, mode),
+    }
+}
+
 /// Where the gather reads bounce `b`'s input (docs/indirect.md §1).
 pub struct RadianceInputs<'a> {
     /// The shading planes (bounce 1: direct diffuse and direct glossy).
@@ -67,10 +76,7 @@ impl RadiancePyramid {
         vector_n2: Option<u32>,
         inputs: RadianceInputs,
     ) -> Result<Self> {
-        let (channels, mode) = match vector_n2 {
-            Some(n2) => (3 + 3 * n2, PyramidMode::Pyramid),
-            None => (3, mode),
-        };
+        let (channels, mode) = shape(mode, vector_n2);
         let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, radiance_kind(channels))?;
         let binds = [
             Bind::Buffer(inputs.shade),

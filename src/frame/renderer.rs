@@ -56,6 +56,7 @@ impl Renderer {
     /// Validates the settings, creates every pass and uploads the heights.
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
         scene.gi.validate()?;
+        scene.check_limits()?;
         let (w, h) = (scene.field.width(), scene.field.height());
         let work = scene.gi.working_size(w, h);
         let mut pyramid = HeightPyramid::new(ctx, w, h, work, scene.gi.level_step, scene.gi.pyramid, scene.wrap)?;
@@ -150,6 +151,7 @@ impl Renderer {
     /// Replaces the heights from the CPU (same size as the scene's field; waits for the upload).
     /// The next [`Renderer::record`] rebuilds the pyramid.
     pub fn update_heights(&mut self, ctx: &Context, field: &HeightField) -> Result<()> {
+        crate::scene::model::limits::check_heights(field)?;
         let l = self.pyramid.layout().levels[0];
         if (field.width(), field.height()) != (l.width as usize, l.height as usize) {
             return Err(Error::param(

@@ -93,21 +93,18 @@ pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> 
     out
 }
 
-/// The direct shading pass.
-pub struct ShadePass {
-    pipeline: ComputePipeline,
-    descriptors: vk::DescriptorSet,
-    buffers: Vec<Buffer>, // light, triple, albedo, consts
-    output: Buffer,
-    incident: Buffer,
-    push: ShadePush,
+/// What the pass uploads (light, triple, albedo, constants), computed from the scene (one
+/// source for the pass and [`crate::frame::memory`]).
+pub(crate) struct ShadeData {
+    light: Vec<[f32; 4]>,
+    entries: Vec<[u32; 2]>,
+    albedo: Vec<[f32; 4]>,
+    consts: Vec<u32>,
 }
 
-impl ShadePass {
-    pub fn new(ctx: &Context, pyramid: &HeightPyramid, vis: &VisibilityPass, scene: &Scene) -> Result<Self> {
+impl ShadeData {
+    pub(crate) fn new(scene: &Scene) -> Self {
         let n = scene.gi.sh_order;
-        let store_t = super::renderer::vector_pyramid(scene);
-        let (w, h) = (scene.field.width(), scene.field.height());
         let light: Vec<[f32; 4]> = light_sets(scene)
             .iter()
             .flat_map(|(k, set)| set_lighting(scene, *k, set))
@@ -124,26 +121,94 @@ impl ShadePass {
             Albedo::Constant(_) => vec![[0.0; 4]],
         };
         let consts = constants(n, scene.material.exponent as f64, entries.len() as u32);
+        Self { light, entries, albedo, consts }
+    }
+
+    /// The bytes of the uploaded buffers, in the order of [`upload_sizes`].
+    pub(crate) fn uploads(&self) -> [&[u8]; 4] {
+        [
+            bytemuck::cast_slice::<_, u8>(&self.light),
+            bytemuck::cast_slice(&self.entries),
+            bytemuck::cast_slice(&self.albedo),
+            bytemuck::cast_slice(&self.consts),
+        ]
+    }
+}
+
+/// The uploaded buffers `(name, bytes)` in creation order, sized without building the data
+/// (an albedo map would be a full-resolution copy): [`upload_bytes`] of the lengths
+/// [`ShadeData::new`] produces (the pass checks they agree in debug builds).
+pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
+    let n = scene.gi.sh_order;
+    let albedo = match &scene.material.albedo {
+        Albedo::Map(m) => m.len(),
+        Albedo::Constant(_) => 1,
+    };
+    let triples = triple::triple(n).entries.len();
+    [
+        ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * n * n * 16)),
+        ("hfgi.shade.triple", upload_bytes(triples * 8)),
+        ("hfgi.shade.albedo", upload_bytes(albedo * 16)),
+        ("hfgi.shade.consts", upload_bytes(constants(n, scene.material.exponent as f64, triples as u32).len() * 4)),
+    ]
+}
+
+/// Names of the shading buffer and of the incident-radiance buffer.
+pub(crate) const OUTPUT_BUFFER: &str = "hfgi.shade.output";
+pub(crate) const INCIDENT_BUFFER: &str = "hfgi.shade.incident";
+
+/// Bytes requested for an uploaded buffer of `len` bytes (at least 16).
+pub(crate) fn upload_bytes(len: usize) -> u64 {
+    len.max(16) as u64
+}
+
+/// Bytes of [`OUTPUT_BUFFER`]: [`PLANES`] planes of `w × h` `vec4`s.
+pub(crate) fn output_bytes(w: usize, h: usize) -> u64 {
+    (PLANES * w * h * 16) as u64
+}
+
+/// Bytes of [`INCIDENT_BUFFER`]: `T` per texel (`n²` `vec4`s) for the glossy vector pyramid
+/// (docs/indirect.md §1); 16 bytes otherwise.
+pub(crate) fn incident_bytes(scene: &Scene) -> u64 {
+    let (w, h, n) = (scene.field.width(), scene.field.height(), scene.gi.sh_order);
+    if super::renderer::vector_pyramid(scene) {
+        (w * h * n * n * 16) as u64
+    } else {
+        16
+    }
+}
+
+/// The direct shading pass.
+pub struct ShadePass {
+    pipeline: ComputePipeline,
+    descriptors: vk::DescriptorSet,
+    buffers: Vec<Buffer>, // light, triple, albedo, consts
+    output: Buffer,
+    incident: Buffer,
+    push: ShadePush,
+}
+
+impl ShadePass {
+    pub fn new(ctx: &Context, pyramid: &HeightPyramid, vis: &VisibilityPass, scene: &Scene) -> Result<Self> {
+        let n = scene.gi.sh_order;
+        let store_t = super::renderer::vector_pyramid(scene);
+        let (w, h) = (scene.field.width(), scene.field.height());
+        let data = ShadeData::new(scene);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let mut bufs: Vec<Buffer> = Vec::new();
         let mut pipeline = None;
         let made = (|| -> Result<vk::DescriptorSet> {
-            for (name, bytes) in [
-                ("hfgi.shade.light", bytemuck::cast_slice::<_, u8>(&light)),
-                ("hfgi.shade.triple", bytemuck::cast_slice(&entries)),
-                ("hfgi.shade.albedo", bytemuck::cast_slice(&albedo)),
-                ("hfgi.shade.consts", bytemuck::cast_slice(&consts)),
-            ] {
-                let b = Buffer::new(ctx, name, bytes.len().max(16) as u64, usage, MemoryLocation::GpuOnly)?;
+            for ((name, size), bytes) in upload_sizes(scene).into_iter().zip(data.uploads()) {
+                debug_assert_eq!(size, upload_bytes(bytes.len()), "{name}");
+                let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
                 if !bytes.is_empty() {
                     memory::upload(ctx, &b, 0, bytes)?;
                 }
                 bufs.push(b);
             }
-            let out_bytes = (PLANES * w * h * 16) as u64;
-            let out = Buffer::new(ctx, "hfgi.shade.output", out_bytes, usage, MemoryLocation::GpuOnly)?;
+            let out = Buffer::new(ctx, OUTPUT_BUFFER, output_bytes(w, h), usage, MemoryLocation::GpuOnly)?;
             // Planes not written by a frame (indirect with bounces = 0) must read as zero.
             let cleared = ctx.submit_and_wait(|cmd| {
                 unsafe { ctx.device().cmd_fill_buffer(cmd, out.raw, 0, vk::WHOLE_SIZE, 0) };
@@ -152,9 +217,8 @@ impl ShadePass {
             });
             bufs.push(out);
             cleared?;
-            // T per texel for the glossy vector pyramid (docs/indirect.md §1); 16 bytes otherwise.
-            let inc_bytes = if store_t { (w * h * n * n * 16) as u64 } else { 16 };
-            bufs.push(Buffer::new(ctx, "hfgi.shade.incident", inc_bytes, usage, MemoryLocation::GpuOnly)?);
+            let inc_bytes = incident_bytes(scene);
+            bufs.push(Buffer::new(ctx, INCIDENT_BUFFER, inc_bytes, usage, MemoryLocation::GpuOnly)?);
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,

@@ -220,6 +220,65 @@ impl CameraModel {
     }
 }
 
+/// One image the pass creates (see [`attachments`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Attachment {
+    pub name: &'static str,
+    pub format: vk::Format,
+    pub usage: vk::ImageUsageFlags,
+    /// Samples per pixel.
+    pub samples: u32,
+}
+
+/// The images of the pass in creation order for the chosen formats and sample count: the
+/// single-sample output, the depth image and, with `samples > 1`, the MSAA colour image (one
+/// source for the pass and [`crate::frame::memory`]).
+pub(crate) fn attachments(color: vk::Format, depth: vk::Format, samples: u32) -> Vec<Attachment> {
+    let output_usage =
+        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
+    let mut out = vec![
+        Attachment { name: "hfgi.view.output", format: color, usage: output_usage, samples: 1 },
+        Attachment {
+            name: "hfgi.view.depth",
+            format: depth,
+            usage: vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            samples,
+        },
+    ];
+    if samples > 1 {
+        out.push(Attachment {
+            name: "hfgi.view.msaa",
+            format: color,
+            usage: vk::ImageUsageFlags::COLOR_ATTACHMENT,
+            samples,
+        });
+    }
+    out
+}
+
+/// The field sizes the pass draws: at least 2×2 and fewer than 2³² samples; returns the
+/// sample count.
+pub(crate) fn check_field_size(width: usize, height: usize) -> Result<u64> {
+    let texels = width as u64 * height as u64;
+    if width < 2 || height < 2 || texels > u64::from(u32::MAX) {
+        return Err(Error::param(
+            "view: height field size",
+            format!("{width}×{height}"),
+            "at least 2×2 and fewer than 2³² samples",
+        ));
+    }
+    Ok(texels)
+}
+
+/// Name of the index buffer.
+pub(crate) const INDEX_BUFFER: &str = "hfgi.view.index";
+
+/// Bytes of [`INDEX_BUFFER`] for a field `width` samples wide: one row of quads, 6 `u32`
+/// indices per quad.
+pub(crate) fn index_bytes(width: usize) -> u64 {
+    6 * (width as u64 - 1) * 4
+}
+
 /// The view-image pass.
 pub struct ViewPass {
     pipeline: GraphicsPipeline,
@@ -253,14 +312,7 @@ impl ViewPass {
         inputs: &ViewInputs,
         opts: &ViewOptions,
     ) -> Result<Self> {
-        let texels = width as u64 * height as u64;
-        if width < 2 || height < 2 || texels > u64::from(u32::MAX) {
-            return Err(Error::param(
-                "view: height field size",
-                format!("{width}×{height}"),
-                "at least 2×2 and fewer than 2³² samples",
-            ));
-        }
+        let texels = check_field_size(width, height)?;
         for (name, buf, need) in [("heights", inputs.heights, texels * 4), ("shading", inputs.shading, texels * 16)] {
             if buf.size < need {
                 return Err(Error::param(
@@ -288,42 +340,19 @@ impl ViewPass {
         let mut index = None;
         let mut pipeline = None;
         let made = (|| -> Result<vk::DescriptorSet> {
-            images.push(Image::new(
-                ctx,
-                "hfgi.view.output",
-                extent,
-                choice.color_format,
-                vk::ImageUsageFlags::COLOR_ATTACHMENT
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::SAMPLED,
-                vk::SampleCountFlags::TYPE_1,
-            )?);
-            images.push(Image::new(
-                ctx,
-                "hfgi.view.depth",
-                extent,
-                choice.depth_format,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-                samples,
-            )?);
-            if choice.samples > 1 {
-                images.push(Image::new(
-                    ctx,
-                    "hfgi.view.msaa",
-                    extent,
-                    choice.color_format,
-                    vk::ImageUsageFlags::COLOR_ATTACHMENT,
-                    samples,
-                )?);
+            for a in attachments(choice.color_format, choice.depth_format, choice.samples) {
+                let count = vk::SampleCountFlags::from_raw(a.samples);
+                images.push(Image::new(ctx, a.name, extent, a.format, a.usage, count)?);
             }
             // One row of quads between vertex rows 0 and 1 (v = row·W + i); instance j adds j·W
             // in the shader. Diagonal (i, j)–(i+1, j+1).
             let w = width as u32;
             let indices: Vec<u32> = (0..w - 1).flat_map(|i| [i, i + 1, w + i + 1, i, w + i + 1, w + i]).collect();
+            debug_assert_eq!((indices.len() * 4) as u64, index_bytes(width));
             let ib = index.insert(Buffer::new(
                 ctx,
-                "hfgi.view.index",
-                (indices.len() * 4) as u64,
+                INDEX_BUFFER,
+                index_bytes(width),
                 vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuOnly,
             )?);

@@ -47,10 +47,52 @@ pub fn light_sets(scene: &Scene) -> Vec<(SetKind, AzimuthSet)> {
     sets
 }
 
-struct SetRange {
+pub(crate) struct SetRange {
     kind: SetKind,
     first: u32,
     count: u32,
+}
+
+/// What the pass uploads, computed in f64 from the scene: the azimuth samples
+/// (`[cos φ, sin φ, lo, hi]`), the folded wedge matrices `A_j` and each set's sample range.
+pub(crate) struct VisibilityData {
+    pub samples: Vec<[f32; 4]>,
+    pub fold: Vec<f32>,
+    pub sets: Vec<SetRange>,
+}
+
+impl VisibilityData {
+    pub(crate) fn new(scene: &Scene) -> Self {
+        let n = scene.gi.sh_order;
+        let mut data = Self { samples: Vec::new(), fold: Vec::new(), sets: Vec::new() };
+        for (kind, set) in &light_sets(scene) {
+            let first = data.samples.len() as u32;
+            for &phi in &set.phi {
+                data.samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
+            }
+            data.fold.extend(super::shared::gpu_fold(n, set, &scene.gi));
+            data.sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
+        }
+        data
+    }
+}
+
+/// The pass's buffers `(name, bytes)` in creation order, for `samples` azimuth samples, `fold`
+/// floats of folded matrices and `sets` light sets on a `work` grid with `n2` coefficients
+/// (one source for the pass and [`crate::frame::memory`]).
+pub(crate) fn buffer_sizes(
+    samples: usize,
+    fold: usize,
+    sets: usize,
+    work: (usize, usize),
+    n2: usize,
+) -> [(&'static str, u64); 3] {
+    let vis_floats = (sets.max(1) * work.0 * work.1 * n2) as u64;
+    [
+        ("hfgi.visibility.samples", (samples.max(1) * 16) as u64),
+        ("hfgi.visibility.fold", (fold.max(1) * 4) as u64),
+        ("hfgi.visibility.v", vis_floats * 4),
+    ]
 }
 
 /// The visibility pass and its buffers.
@@ -74,40 +116,17 @@ impl VisibilityPass {
         let n = scene.gi.sh_order;
         let n2 = n * n;
         let (ww, wh) = pyramid.work();
-        let light_sets = light_sets(scene);
-        let mut samples: Vec<[f32; 4]> = Vec::new();
-        let mut fold: Vec<f32> = Vec::new();
-        let mut sets = Vec::new();
-        for (kind, set) in &light_sets {
-            let first = samples.len() as u32;
-            for &phi in &set.phi {
-                samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
-            }
-            fold.extend(super::shared::gpu_fold(n, set, &scene.gi));
-            sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
-        }
+        let VisibilityData { samples, fold, sets } = VisibilityData::new(scene);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
-        let vis_floats = (sets.len().max(1) * ww as usize * wh as usize * n2) as u64;
+        let sizes = buffer_sizes(samples.len(), fold.len(), sets.len(), (ww as usize, wh as usize), n2);
         let mut parts: Vec<Buffer> = Vec::new();
         let mut pipeline = None;
         let made = (|| -> Result<vk::DescriptorSet> {
-            parts.push(Buffer::new(
-                ctx,
-                "hfgi.visibility.samples",
-                (samples.len().max(1) * 16) as u64,
-                usage,
-                MemoryLocation::GpuOnly,
-            )?);
-            parts.push(Buffer::new(
-                ctx,
-                "hfgi.visibility.fold",
-                (fold.len().max(1) * 4) as u64,
-                usage,
-                MemoryLocation::GpuOnly,
-            )?);
-            parts.push(Buffer::new(ctx, "hfgi.visibility.v", vis_floats * 4, usage, MemoryLocation::GpuOnly)?);
+            for (name, size) in sizes {
+                parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
+            }
             if !samples.is_empty() {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
                 memory::upload_f32(ctx, &parts[1], 0, &fold)?;

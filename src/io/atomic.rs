@@ -57,6 +57,12 @@ pub fn write_bytes_with<W: Write>(path: &Path, bytes: &[u8], wrap: impl FnOnce(F
         let _ = std::fs::remove_file(&tmp);
         return Err(Error::io(path, e));
     }
+    commit(tmp, path)
+}
+
+/// Renames a complete, synced temporary file over `path`, or stages it when inside
+/// [`all_or_nothing`]. On failure the temporary file is removed.
+fn commit(tmp: PathBuf, path: &Path) -> Result<()> {
     let staged = STAGED.with(|s| match s.borrow_mut().as_mut() {
         Some(list) => {
             list.push((tmp.clone(), path.to_path_buf()));
@@ -71,6 +77,60 @@ pub fn write_bytes_with<W: Write>(path: &Path, bytes: &[u8], wrap: impl FnOnce(F
         let _ = std::fs::remove_file(&tmp);
         Error::io(path, e)
     })
+}
+
+/// An output written piece by piece (an animation's GIF, frame after frame) with the same
+/// guarantee as [`write_bytes`]: the pieces go to a temporary file next to the target, and only
+/// [`TempFile::commit`] — after a flush and a sync — renames it over the target (or stages it
+/// inside [`all_or_nothing`]). Dropped without a commit (an error, a panic), the temporary file
+/// is removed and the target is unchanged. Memory stays bounded by what the writer buffers.
+pub struct TempFile {
+    tmp: PathBuf,
+    path: PathBuf,
+    file: Option<File>,
+}
+
+impl TempFile {
+    /// A new temporary file for `path` (an error if `path` is a directory or its folder cannot
+    /// take a new file).
+    pub fn create(path: &Path) -> Result<Self> {
+        if path.is_dir() {
+            return Err(Error::param("output path", path.display(), "a file path, not a directory"));
+        }
+        let tmp = temp_path(path);
+        let file = OpenOptions::new().write(true).create_new(true).open(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        Ok(Self { tmp, path: path.to_path_buf(), file: Some(file) })
+    }
+
+    /// The target path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// A handle to write the pieces through (the same open file).
+    pub fn writer(&self) -> Result<File> {
+        let file = self.file.as_ref().ok_or_else(|| Error::format(&self.path, "already committed"))?;
+        file.try_clone().map_err(|e| Error::io(&self.tmp, e))
+    }
+
+    /// Syncs the file and renames it over the target (staged inside [`all_or_nothing`]). Every
+    /// writer must have been flushed before.
+    pub fn commit(mut self) -> Result<()> {
+        // On a failing sync the file stays held, so Drop removes the temporary file.
+        let file = self.file.as_ref().ok_or_else(|| Error::format(&self.path, "already committed"))?;
+        file.sync_all().map_err(|e| Error::io(&self.path, e))?;
+        self.file = None;
+        let tmp = std::mem::take(&mut self.tmp);
+        commit(tmp, &self.path)
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if self.file.take().is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
 }
 
 thread_local! {

@@ -133,8 +133,18 @@ pub type ExrChannel = (String, String, Vec<f32>);
 /// f32, row-major with row 0 the top (first) row, channels in file order (alphabetical within a
 /// part). All parts must have the same size; deep data and subsampled channels are rejected.
 pub fn read_layers(path: &Path) -> Result<(usize, usize, Vec<ExrChannel>)> {
+    crate::scene::load::nonempty_len(path)?;
     let image = catch_unwind(AssertUnwindSafe(|| {
-        read().no_deep_data().largest_resolution_level().all_channels().all_layers().all_attributes().from_file(path)
+        // `non_parallel`: a panic in a decompressor on exr's rayon pool would abort the process
+        // instead of reaching this `catch_unwind` (found by fuzzing, docs/robustness.md).
+        read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .all_layers()
+            .all_attributes()
+            .non_parallel()
+            .from_file(path)
     }))
     .map_err(|_| Error::format(path, "EXR decoder panicked (corrupt file)"))?
     .map_err(|e| exr_error(path, e, "truncated or corrupt EXR"))?;

@@ -9,3 +9,4 @@ pub mod ray;
 pub mod sh_eval;
 pub mod truth;
 pub mod water;
+pub mod work;

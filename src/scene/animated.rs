@@ -20,6 +20,7 @@ use std::str::FromStr;
 use crate::error::{Error, Result};
 use crate::scene::generators::det_sin;
 use crate::scene::heightfield::{HeightField, DEFAULT_MAX_DIM};
+use crate::scene::model::limits;
 
 /// Most rain drops that can fall in one simulation step (they travel in push constants).
 pub const MAX_DROPS_PER_STEP: usize = 4;
@@ -230,8 +231,20 @@ impl WaterParams {
             (1..=MAX_STEPS_PER_FRAME).contains(&spf),
             format!("an integer in 1..={MAX_STEPS_PER_FRAME}"),
         )?;
-        check("rest_level", self.rest_level, self.rest_level.is_finite(), "a finite number (world units)")?;
-        check("scale", self.scale, self.scale.is_finite() && self.scale != 0.0, "a finite number ≠ 0")?;
+        let h = limits::MAX_HEIGHT;
+        check(
+            "rest_level",
+            self.rest_level,
+            self.rest_level.is_finite() && self.rest_level.abs() <= h,
+            format!("a number in [-{h:e}, {h:e}] (world units)"),
+        )?;
+        let m = limits::MAX_MOTION;
+        check(
+            "scale",
+            self.scale,
+            self.scale.is_finite() && self.scale != 0.0 && self.scale.abs() <= m,
+            format!("a number ≠ 0 in [-{m:e}, {m:e}] (world units per simulation unit)"),
+        )?;
         let r = &self.rain;
         check(
             "rain_rate",
@@ -239,7 +252,12 @@ impl WaterParams {
             r.rate.is_finite() && (0.0..=MAX_DROPS_PER_STEP as f64).contains(&r.rate),
             format!("a number in [0, {MAX_DROPS_PER_STEP}] (expected drops per step)"),
         )?;
-        check("drop_amplitude", r.amplitude, r.amplitude.is_finite(), "a finite number")?;
+        check(
+            "drop_amplitude",
+            r.amplitude,
+            r.amplitude.is_finite() && (r.amplitude * self.scale).abs() <= m,
+            format!("a number with |drop_amplitude × scale| ≤ {m:e} (world units)"),
+        )?;
         let (lo, hi) = DROP_RADIUS_RANGE;
         check(
             "drop_radius",
@@ -336,10 +354,16 @@ impl BumpParams {
         check(
             "radius",
             self.radius,
-            self.radius.is_finite() && self.radius > 0.0 && self.radius <= 1.0,
-            "a number in (0, 1] (fraction of the width)",
+            (limits::BUMP_RADIUS.0..=limits::BUMP_RADIUS.1).contains(&self.radius),
+            format!("a number in [{}, {}] (fraction of the width)", limits::BUMP_RADIUS.0, limits::BUMP_RADIUS.1),
         )?;
-        check("amplitude", self.amplitude, self.amplitude.is_finite(), "a finite number (fraction of the width)")?;
+        let m = limits::MAX_BUMP_AMPLITUDE;
+        check(
+            "amplitude",
+            self.amplitude,
+            self.amplitude.is_finite() && self.amplitude.abs() <= m,
+            format!("a number in [-{m:e}, {m:e}] (fraction of the width)"),
+        )?;
         check("period", self.period, self.period >= 2, "an integer ≥ 2 (frames)")?;
         check(
             "travel",

@@ -132,8 +132,10 @@ pub fn project_equirect(width: usize, height: usize, rgb: &[[f32; 3]], n: usize,
 ///
 /// Errors: [`Error::Io`] / [`Error::Format`] for unreadable or corrupt files and missing
 /// channels (the message lists the channels found), [`Error::NonFinite`] for a NaN or infinite
-/// sample (naming its pixel).
+/// sample (naming its pixel), [`Error::Format`] for a file whose header claims more than
+/// [`MAX_ENV_SAMPLES`] samples (checked before any pixel memory is allocated).
 pub fn load_equirect_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>)> {
+    check_env_samples(path)?;
     let (w, h, channels) = read_layers(path)?;
     let find = |layer: &str, name: &str| {
         channels.iter().find(|(l, c, _)| l == layer && c == name).map(|(_, _, data)| data.as_slice())
@@ -168,6 +170,39 @@ pub fn load_equirect_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>)> {
         out.push([r, g, b]);
     }
     Ok((w, h, out))
+}
+
+/// Most samples (pixels × channels, over every part) an environment map file may claim: three
+/// channels of 8192×4096 pixels. The EXR reader allocates every channel at the size its header
+/// claims before it decodes a pixel, so without this bound a 487-byte file claiming
+/// 1073741815×4 pixels took more than 8 GB (found by fuzzing, docs/robustness.md "Fuzzing").
+pub const MAX_ENV_SAMPLES: usize = 3 * 8192 * 4096;
+
+/// Rejects a file whose headers claim more than [`MAX_ENV_SAMPLES`] samples. A header that
+/// cannot be read is left to [`read_layers`], which reports it.
+fn check_env_samples(path: &Path) -> Result<()> {
+    let Ok(Ok(meta)) = std::panic::catch_unwind(|| exr::meta::MetaData::read_from_file(path, false)) else {
+        return Ok(());
+    };
+    let mut samples = 0usize;
+    for header in &meta.headers {
+        let size = header.layer_size;
+        let n = size.width().saturating_mul(size.height()).saturating_mul(header.channels.list.len());
+        samples = samples.saturating_add(n);
+    }
+    if samples > MAX_ENV_SAMPLES {
+        let h = &meta.headers[0];
+        let (w, ht, c) = (h.layer_size.width(), h.layer_size.height(), h.channels.list.len());
+        return Err(Error::format(
+            path,
+            format!(
+                "environment map of {w}×{ht} pixels, {c} channel(s) ({} part(s) in all) holds more than \
+                 {MAX_ENV_SAMPLES} samples (8192×4096 RGB); expected a smaller map",
+                meta.headers.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// An analytic environment (`[environment] preset = "..."`), radiance in linear RGB.

@@ -18,7 +18,7 @@
 
 use std::fmt::Display;
 use std::fs::File;
-use std::io::BufReader;
+use std::io::{BufReader, Read};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
@@ -36,6 +36,7 @@ use crate::scene::generators::Generator;
 use crate::scene::geotiff::{NoData, TiffMeta};
 use crate::scene::heightfield::DEFAULT_MAX_DIM;
 use crate::scene::load::{load_heightfield_meta, LoadOptions};
+use crate::scene::model::limits;
 use crate::scene::model::{
     Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Quality,
     Scene,
@@ -86,9 +87,44 @@ pub fn default_scene() -> Result<Scene> {
 ///
 /// Errors: [`Error::Io`] if the file cannot be read (or is not UTF-8), else as [`parse_scene`].
 pub fn load_scene(path: &Path, overrides: &[String]) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_scene_text(path)?;
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_scene(&text, &base, &path.display().to_string(), overrides)
+}
+
+/// Largest scene file read, in bytes: a scene is a few kilobytes of TOML (an inline
+/// environment of order 8 is about 5 KB), so anything larger is not a scene file.
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// The text of the scene file at `path`, after checking that it is a regular file of at most
+/// [`MAX_SCENE_BYTES`] — a character device such as `/dev/zero`, a FIFO or a huge file is an
+/// error before anything is read (docs/robustness.md, "Bounded inputs and work").
+fn read_scene_text(path: &Path) -> Result<String> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::format(path, "is a directory; expected a scene file (TOML)"));
+    }
+    if !meta.is_file() {
+        return Err(Error::format(
+            path,
+            "is not a regular file (a device, FIFO or socket); expected a scene file (TOML)",
+        ));
+    }
+    if meta.len() > MAX_SCENE_BYTES {
+        return Err(Error::format(
+            path,
+            format!("is {} bytes; a scene file is TOML text of at most {MAX_SCENE_BYTES} bytes", meta.len()),
+        ));
+    }
+    let mut text = String::new();
+    // The file may grow after the check: never read more than the limit.
+    std::io::Read::take(File::open(path).map_err(|e| Error::io(path, e))?, MAX_SCENE_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| Error::io(path, e))?;
+    if text.len() as u64 > MAX_SCENE_BYTES {
+        return Err(Error::format(path, format!("grew past {MAX_SCENE_BYTES} bytes while being read")));
+    }
+    Ok(text)
 }
 
 /// The files a scene reads besides itself — `heightfield.file`, `material.albedo_map`,
@@ -100,7 +136,7 @@ pub fn input_files(path: Option<&Path>, overrides: &[String]) -> Vec<PathBuf> {
     const KEYS: [(&str, &str); 3] = [("heightfield", "file"), ("material", "albedo_map"), ("environment", "map")];
     let base = path.and_then(Path::parent).map(Path::to_path_buf).unwrap_or_default();
     let mut out: Vec<PathBuf> = path.map(Path::to_path_buf).into_iter().collect();
-    let doc = path.and_then(|p| std::fs::read_to_string(p).ok()).and_then(|t| t.parse::<Table>().ok());
+    let doc = path.and_then(|p| read_scene_text(p).ok()).and_then(|t| t.parse::<Table>().ok());
     for (table, key) in KEYS {
         if let Some(v) = doc.as_ref().and_then(|d| d.get(table)?.get(key)?.as_str().map(str::to_string)) {
             out.push(base.join(v));
@@ -136,7 +172,9 @@ pub fn input_files(path: Option<&Path>, overrides: &[String]) -> Vec<PathBuf> {
 /// malformed override, or a referenced file that cannot be loaded (with that file's error).
 pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[String]) -> Result<Scene> {
     let mut ctx = Ctx { file: source_name, base_dir, overrides: Vec::new() };
-    let mut doc: Table = toml::from_str(text).map_err(|e| ctx.err(None, e.to_string().trim_end().to_string()))?;
+    let mut doc: Table = toml::from_str(text).map_err(|e| {
+        ctx.err(None, crate::error::shorten_lines(e.to_string().trim_end(), crate::error::ECHO_MAX_CHARS))
+    })?;
     if !doc.contains_key("environment") && !doc.contains_key("key_light") {
         doc.insert("environment".into(), Value::Table(Table::new()));
         doc.insert("key_light".into(), Value::Array(vec![Value::Table(Table::new())]));
@@ -446,7 +484,7 @@ impl Ctx<'_> {
         if let Some(k) = key {
             let covers = |p: &str| p == k || k.starts_with(&format!("{p}.")) || p.starts_with(&format!("{k}."));
             if let Some(o) = self.overrides.iter().rev().find(|o| covers(&o.key)) {
-                message.push_str(&format!(" (set by --set {})", o.text));
+                message.push_str(&format!(" (set by --set {})", crate::error::shorten(&o.text)));
             }
         }
         Error::SceneFile { file: self.file.to_string(), key: key.map(str::to_string), message }
@@ -454,6 +492,7 @@ impl Ctx<'_> {
 
     /// `invalid key = value: expected …`.
     fn invalid(&self, key: &str, value: impl Display, expected: impl Display) -> Error {
+        let value = crate::error::shorten(&value.to_string());
         self.err(Some(key), format!("invalid {key} = {value}: expected {expected}"))
     }
 
@@ -556,8 +595,13 @@ impl Ctx<'_> {
     fn heightfield(&self, t: Option<&Table>) -> Result<(HeightField, f64, bool)> {
         let raw: RawHeightfield = self.de_opt(t, "heightfield")?;
         let mut texel = raw.texel_size.unwrap_or(1.0);
-        if !(texel.is_finite() && texel > 0.0) {
-            return Err(self.invalid("heightfield.texel_size", texel, "a finite number > 0"));
+        let (lo, hi) = limits::TEXEL_SIZE;
+        if !(texel.is_finite() && (lo..=hi).contains(&texel)) {
+            return Err(self.invalid(
+                "heightfield.texel_size",
+                texel,
+                format!("a number in [{lo:e}, {hi:e}] (world units)"),
+            ));
         }
         let nodata = self.nodata(raw.nodata.as_ref())?;
         let scale = raw.height_scale.unwrap_or(1.0);
@@ -636,7 +680,13 @@ impl Ctx<'_> {
                     .map_err(|e| self.wrap("heightfield.height_offset", e))?
             }
         };
+        self.height_magnitudes(&field)?;
         Ok((field, texel, raw.wrap.unwrap_or(false)))
+    }
+
+    /// Every height within ±[`limits::MAX_HEIGHT`] (after `height_scale` and `height_offset`).
+    fn height_magnitudes(&self, field: &HeightField) -> Result<()> {
+        limits::check_heights(field).map_err(|e| self.err(Some("heightfield"), format!("heightfield: {e}")))
     }
 
     /// `heightfield.nodata`: `"reject"` (default), `"lowest"` or a fill value (file units).
@@ -698,12 +748,15 @@ impl Ctx<'_> {
         let specular = raw
             .specular
             .map(|s| {
-                self.rgb("material.specular", s, 0.0, f64::INFINITY, "[r, g, b] with each component finite and ≥ 0")
+                let m = limits::MAX_SPECULAR;
+                self.rgb("material.specular", s, 0.0, m, &format!("[r, g, b] with each component in [0, {m:e}]"))
             })
             .transpose()?
             .map(|s| s.map(|x| x as f32));
         let e = raw.exponent.unwrap_or(DEFAULT_EXPONENT);
-        let exponent = self.finite_f32("material.exponent", e, e > 0.0, "a finite number > 0")?;
+        let (lo, hi) = limits::EXPONENT;
+        let exponent =
+            self.finite_f32("material.exponent", e, (lo..=hi).contains(&e), &format!("a number in [{lo}, {hi}]"))?;
         Ok(Material { albedo, specular, exponent })
     }
 
@@ -713,6 +766,7 @@ impl Ctx<'_> {
         const KEY: &str = "material.albedo_map";
         let path = self.resolve(file);
         let fail = |what: String| self.err(Some(KEY), format!("{KEY}: {}: {what}", path.display()));
+        crate::scene::load::nonempty_len(&path).map_err(|e| self.wrap(KEY, e))?;
         let f = File::open(&path).map_err(|e| fail(e.to_string()))?;
         let decoded = catch_unwind(AssertUnwindSafe(|| -> std::result::Result<Vec<[f32; 3]>, String> {
             let decoder = PngDecoder::new(BufReader::new(f))
@@ -759,8 +813,9 @@ impl Ctx<'_> {
         let Some(t) = t else { return Ok(Environment::default()) };
         let raw: RawEnvironment = self.de_table(t, "environment")?;
         let intensity = raw.intensity.unwrap_or(1.0);
-        if !(intensity.is_finite() && intensity >= 0.0) {
-            return Err(self.invalid("environment.intensity", intensity, "a finite number ≥ 0"));
+        let m = limits::MAX_INTENSITY;
+        if !(intensity.is_finite() && (0.0..=m).contains(&intensity)) {
+            return Err(self.invalid("environment.intensity", intensity, format!("a number in [0, {m:e}]")));
         }
         let given: Vec<&str> = [("sh", raw.sh.is_some()), ("map", raw.map.is_some()), ("preset", raw.preset.is_some())]
             .into_iter()
@@ -797,7 +852,20 @@ impl Ctx<'_> {
             let preset: Preset = name.parse().map_err(|e| self.wrap("environment.preset", e))?;
             preset.sh()
         };
-        Ok(Environment { sh: coeffs.into_iter().map(|c| c.map(|x| x * intensity)).collect() })
+        let sh: Vec<[f64; 3]> = coeffs.into_iter().map(|c| c.map(|x| x * intensity)).collect();
+        let m = limits::MAX_RADIANCE;
+        if let Some(k) = sh.iter().position(|c| c.iter().any(|x| x.abs() > m)) {
+            let source = ["sh", "map", "preset"].into_iter().find(|k| t.contains_key(*k)).unwrap_or("sh");
+            return Err(self.err(
+                Some(&format!("environment.{source}")),
+                format!(
+                    "environment SH coefficient {k} = {} (after intensity {intensity}) is beyond ±{m:e}; \
+                     expected radiances within ±{m:e} (scale the environment down)",
+                    crate::error::shorten(&fmt_list(&sh[k]))
+                ),
+            ));
+        }
+        Ok(Environment { sh })
     }
 
     fn key_lights(&self, tables: &[Table]) -> Result<Vec<KeyLight>> {
@@ -815,12 +883,14 @@ impl Ctx<'_> {
                     ));
                 }
                 (Some(d), _, _) => {
+                    // Scaled by its largest component first, so that neither 1e-300 nor 1e300
+                    // components under- or overflow the length.
                     let v = DVec3::from_array(d);
-                    let len = v.length();
-                    if !(v.is_finite() && len.is_finite() && len > 0.0) {
+                    let big = v.abs().max_element();
+                    if !(v.is_finite() && big > 0.0) {
                         return Err(self.invalid(&key("direction"), fmt_list(&d), "a finite, non-zero [x, y, z]"));
                     }
-                    v / len
+                    (v / big).normalize()
                 }
                 (None, el, az) => {
                     let el = el.unwrap_or(DEFAULT_KEY_ELEVATION_DEG);
@@ -828,22 +898,29 @@ impl Ctx<'_> {
                     if !(el.is_finite() && (-90.0..=90.0).contains(&el)) {
                         return Err(self.invalid(&key("elevation_deg"), el, "a number in [-90, 90] (degrees)"));
                     }
-                    if !az.is_finite() {
-                        return Err(self.invalid(&key("azimuth_deg"), az, "a finite number (degrees)"));
+                    let m = limits::MAX_AZIMUTH_DEG;
+                    if !(az.is_finite() && az.abs() <= m) {
+                        return Err(self.invalid(
+                            &key("azimuth_deg"),
+                            az,
+                            format!("a number in [-{m}, {m}] (degrees)"),
+                        ));
                     }
                     direction_from_angles(el, az)
                 }
             };
             let r = raw.angular_radius_deg.unwrap_or(DEFAULT_KEY_RADIUS_DEG);
-            if !(r > 0.0 && r <= 90.0) {
-                return Err(self.invalid(&key("angular_radius_deg"), r, "a number in (0, 90] (degrees)"));
+            let (lo, hi) = limits::ANGULAR_RADIUS_DEG;
+            if !(lo..=hi).contains(&r) {
+                return Err(self.invalid(&key("angular_radius_deg"), r, format!("a number in [{lo}, {hi}] (degrees)")));
             }
+            let m = limits::MAX_RADIANCE;
             let radiance = self.rgb(
                 &key("radiance"),
                 raw.radiance.unwrap_or(DEFAULT_KEY_RADIANCE),
                 0.0,
-                f64::INFINITY,
-                "[r, g, b] with each component finite and ≥ 0",
+                m,
+                &format!("[r, g, b] with each component in [0, {m:e}]"),
             )?;
             out.push(KeyLight { direction, angular_radius: r.to_radians(), radiance });
         }
@@ -900,11 +977,16 @@ impl Ctx<'_> {
         let raw: RawCamera = self.de_opt(t, "camera")?;
         let (lo, hi) = field.range();
         let mut cam = Camera::default_for(field.width(), field.height(), texel, f64::from(lo), f64::from(hi));
+        let m = limits::MAX_COORDINATE;
         let vec3 = |k: &str, v: [f64; 3]| {
-            if v.iter().all(|x| x.is_finite()) {
+            if v.iter().all(|x| x.is_finite() && x.abs() <= m) {
                 Ok(DVec3::from_array(v))
             } else {
-                Err(self.invalid(k, fmt_list(&v), "[x, y, z], finite"))
+                Err(self.invalid(
+                    k,
+                    fmt_list(&v),
+                    format!("[x, y, z] with each coordinate in [-{m:e}, {m:e}] (world units)"),
+                ))
             }
         };
         if let Some(p) = raw.position {
@@ -924,8 +1006,9 @@ impl Ctx<'_> {
             ));
         }
         if let Some(f) = raw.fov_deg {
-            if !(f > 0.0 && f < 180.0) {
-                return Err(self.invalid("camera.fov_deg", f, "a number in (0, 180) (degrees)"));
+            let (lo, hi) = limits::FOV_DEG;
+            if !(lo..=hi).contains(&f) {
+                return Err(self.invalid("camera.fov_deg", f, format!("a number in [{lo}, {hi}] (degrees)")));
             }
             cam.fov_deg = f;
         }
@@ -940,7 +1023,9 @@ impl Ctx<'_> {
             }
         }
         if let Some(e) = raw.exposure {
-            cam.exposure = self.finite_f32("camera.exposure", e, true, "a finite number (stops)")?;
+            let m = limits::MAX_EXPOSURE_STOPS;
+            cam.exposure =
+                self.finite_f32("camera.exposure", e, e.abs() <= m, &format!("a number in [-{m}, {m}] (stops)"))?;
         }
         Ok(cam)
     }

@@ -96,7 +96,8 @@ pub fn load_heightfield_meta(path: &Path, opts: &LoadOptions) -> Result<(HeightF
 pub(crate) fn nonempty_len(path: &Path) -> Result<u64> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
-        return Err(Error::format(path, "not a regular file"));
+        let what = if meta.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
+        return Err(Error::format(path, format!("is {what}; expected a file to read")));
     }
     if meta.len() == 0 {
         return Err(Error::format(path, "empty file (0 bytes)"));
@@ -238,6 +239,9 @@ fn load_exr(path: &Path, opts: &LoadOptions) -> Result<HeightField> {
             )
             .first_valid_layer()
             .all_attributes()
+            // On the calling thread: a panic in a decompressor running on exr's rayon pool
+            // aborts the process, past `guarded` (found by fuzzing, docs/robustness.md).
+            .non_parallel()
             .from_buffered(Cursor::new(&bytes[..]))
             .map_err(corrupt)?;
         let layer = image.layer_data;
@@ -262,7 +266,8 @@ fn load_raw(path: &Path, opts: &LoadOptions) -> Result<HeightField> {
     let expected = (w as u64) * (h as u64) * 4;
     let found = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !found.is_file() {
-        return Err(Error::format(path, "not a regular file"));
+        let what = if found.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
+        return Err(Error::format(path, format!("is {what}; expected a file to read")));
     }
     let wrong = |found: u64| {
         let hint = if found == 0 {

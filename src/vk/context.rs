@@ -49,6 +49,12 @@ pub struct DeviceInfo {
     pub timestamp_period: f32,
     /// Valid bits of a timestamp on hfgi's queue family (0: no timestamps).
     pub timestamp_valid_bits: u32,
+    /// Bytes of the largest `DEVICE_LOCAL` memory heap (what hfgi's buffers live in).
+    pub device_local_heap_bytes: u64,
+    /// `maxStorageBufferRange`: the largest storage buffer a shader may bind.
+    pub max_storage_buffer_range: u32,
+    /// `maxMemoryAllocationSize` (Vulkan 1.1): the largest single allocation.
+    pub max_memory_allocation_size: u64,
 }
 
 struct Messenger {
@@ -125,6 +131,7 @@ impl Context {
     /// Like [`Context::headless`] with explicit options.
     pub fn headless_with(opts: &ContextOptions) -> Result<Self> {
         let validation = opts.validation.unwrap_or_else(|| env_flag("HFGI_VALIDATION"));
+        let from_env = opts.device_filter.is_none();
         let filter = opts.device_filter.clone().or_else(|| std::env::var("HFGI_DEVICE").ok()).filter(|s| !s.is_empty());
         // SAFETY: loading the system Vulkan loader.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
@@ -178,7 +185,8 @@ impl Context {
             // Chained so that instance creation/destruction messages are caught too.
             ici = ici.push_next(&mut dbg_info);
         }
-        let instance = unsafe { entry.create_instance(&ici, None) }.vk("vkCreateInstance")?;
+        let instance = unsafe { entry.create_instance(&ici, None) }
+            .map_err(|result| Error::NoDevice(format!("vkCreateInstance failed with {result:?}; {}", driver_hint())))?;
         let messenger = if validation {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             match unsafe { loader.create_debug_utils_messenger(&dbg_info, None) } {
@@ -199,7 +207,7 @@ impl Context {
             }
             instance.destroy_instance(None);
         };
-        let picked = match Self::pick_device(&instance, filter.as_deref()) {
+        let picked = match Self::pick_device(&instance, filter.as_deref(), from_env) {
             Ok(p) => p,
             Err(e) => {
                 cleanup(&instance, &messenger);
@@ -288,7 +296,13 @@ impl Context {
         })
     }
 
-    fn pick_device(instance: &ash::Instance, filter: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+    /// The best device, or the first whose name contains `filter` (from `HFGI_DEVICE` when
+    /// `from_env`, else from [`ContextOptions::device_filter`]; messages name the source).
+    fn pick_device(
+        instance: &ash::Instance,
+        filter: Option<&str>,
+        from_env: bool,
+    ) -> Result<(vk::PhysicalDevice, u32)> {
         let devices = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
         let mut candidates = Vec::new();
         let mut seen = Vec::new();
@@ -314,7 +328,12 @@ impl Context {
         candidates.first().map(|c| (c.1, c.2)).ok_or_else(|| {
             Error::NoDevice(format!(
                 "{}; devices present: [{}] (need Vulkan 1.3 and a graphics+compute queue)",
-                filter.map(|f| format!("none matches HFGI_DEVICE={f:?}")).unwrap_or_else(|| "none usable".into()),
+                match (filter, from_env) {
+                    (Some(f), true) => format!("no device name contains {f:?} (HFGI_DEVICE)"),
+                    (Some(f), false) => format!("no device name contains {f:?} (the requested device)"),
+                    (None, _) if seen.is_empty() => format!("the Vulkan loader found no device; {}", driver_hint()),
+                    (None, _) => "none usable".into(),
+                },
                 seen.join(", ")
             ))
         })
@@ -322,9 +341,17 @@ impl Context {
 
     fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
-        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut m3);
         unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
         let props = p2.properties;
+        let mem = unsafe { instance.get_physical_device_memory_properties(pd) };
+        let device_local_heap_bytes = mem.memory_heaps[..mem.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0);
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let dname = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -347,6 +374,9 @@ impl Context {
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
             timestamp_period: props.limits.timestamp_period,
             timestamp_valid_bits: valid_bits,
+            device_local_heap_bytes,
+            max_storage_buffer_range: props.limits.max_storage_buffer_range,
+            max_memory_allocation_size: m3.max_memory_allocation_size,
         }
     }
 
@@ -355,8 +385,9 @@ impl Context {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
         let instance =
-            unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }
-                .vk("vkCreateInstance")?;
+            unsafe { entry.create_instance(&vk::InstanceCreateInfo::default().application_info(&app), None) }.map_err(
+                |result| Error::NoDevice(format!("vkCreateInstance failed with {result:?}; {}", driver_hint())),
+            )?;
         let out = unsafe { instance.enumerate_physical_devices() }.map(|ds| {
             ds.into_iter()
                 .map(|pd| {
@@ -501,4 +532,32 @@ impl Drop for Context {
             }
         }
     }
+}
+
+/// What to check when the Vulkan loader finds no driver (`ERROR_INCOMPATIBLE_DRIVER`,
+/// `ERROR_OUT_OF_HOST_MEMORY` from a broken manifest, or no device): the driver manifest
+/// variables and whether the files they name exist.
+pub fn driver_hint() -> String {
+    let mut parts = Vec::new();
+    for var in ["VK_DRIVER_FILES", "VK_ICD_FILENAMES"] {
+        if let Ok(v) = std::env::var(var) {
+            let files: Vec<String> = std::env::split_paths(&v)
+                .map(|p| {
+                    let state = if p.is_file() { "exists" } else { "missing" };
+                    format!("{} ({state})", p.display())
+                })
+                .collect();
+            parts.push(format!("{var} = {}", files.join(", ")));
+        }
+    }
+    let pinned = if parts.is_empty() {
+        "no driver manifest is pinned (VK_DRIVER_FILES unset)".to_string()
+    } else {
+        format!("the driver manifest is pinned by {}", parts.join("; "))
+    };
+    format!(
+        "{pinned}; check that it names an installed driver's JSON manifest (lavapipe: \
+         /usr/share/vulkan/icd.d/lvp_icd.x86_64.json from mesa-vulkan-drivers), or unset it to let the \
+         loader search /usr/share/vulkan/icd.d; `hfgi devices` lists what the loader finds"
+    )
 }

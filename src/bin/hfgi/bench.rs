@@ -305,10 +305,30 @@ fn settings_label(g: &GiSettings) -> String {
     )
 }
 
-pub fn bench(a: BenchArgs) -> Result<()> {
-    if a.frames == 0 {
-        bail!("--frames 0: expected at least 1 timed frame");
+/// Most timed frames per configuration (the median of a few is what the bench reports).
+const MAX_BENCH_FRAMES: u32 = 1000;
+
+/// Every file `bench` writes (results.csv, results.md, a Pareto plot per scene) checked
+/// against its inputs (every scene and the files they read) before any work.
+fn check_bench_outputs(a: &BenchArgs) -> Result<()> {
+    let mut outputs = vec![a.out.join("results.csv"), a.out.join("results.md")];
+    let mut inputs = Vec::new();
+    for path in &a.scenes {
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        outputs.push(a.out.join(format!("pareto-{stem}.png")));
+        inputs.extend(hfgi::scene::file::input_files(Some(path), &a.overrides));
     }
+    let outputs: Vec<&std::path::Path> = outputs.iter().map(|p| p.as_path()).collect();
+    let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    hfgi::io::atomic::check_outputs(&outputs, &inputs)?;
+    Ok(())
+}
+
+pub fn bench(a: BenchArgs) -> Result<()> {
+    if !(1..=MAX_BENCH_FRAMES).contains(&a.frames) {
+        bail!("--frames {}: expected 1..={MAX_BENCH_FRAMES} timed frames per configuration", a.frames);
+    }
+    check_bench_outputs(&a)?;
     let ctx = context(&a.device)?;
     let info = ctx.info().clone();
     let lavapipe = info.kind == ash::vk::PhysicalDeviceType::CPU;

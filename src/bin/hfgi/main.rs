@@ -1,22 +1,19 @@
 //! `hfgi` — command-line front end of the hfgi library.
 
+mod animate;
 mod bench;
 mod export;
 mod plot;
+mod pyramid;
 mod reference;
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
-use hfgi::frame::pyramid::{HeightPyramid, PyramidMode};
 use hfgi::frame::view::{ViewOptions, ViewPass};
-use hfgi::frame::water::WaterSim;
 use hfgi::frame::Renderer;
-use hfgi::scene::animated::{Animation, MovingBumps};
-use hfgi::scene::generators::Generator;
-use hfgi::scene::load::{load_heightfield, LoadOptions};
-use hfgi::scene::HeightField;
+use hfgi::scene::animated::Animation;
 use hfgi::vk::{Context, ContextOptions, Recorder, StageTimer};
 
 /// Real-time global illumination on dynamic height fields (Nowrouzezahrai & Snyder 2009), on Vulkan.
@@ -49,7 +46,7 @@ enum Command {
     /// records the frame and writes DIR/frame_0000.png, frame_0001.png, …; optionally an
     /// animated GIF. Prints the renderer's counters, the pipelines created before and after the
     /// loop, and the median per-stage time. See docs/dynamic.md.
-    Animate(AnimateArgs),
+    Animate(animate::AnimateArgs),
     /// Compute the brute-force ground truth of a scene (docs/accuracy.md §1).
     ///
     /// Intersects rays exactly with the full-resolution bilinear surface (no pyramid, no
@@ -86,7 +83,7 @@ enum Command {
     /// when the scene has an [animation].
     Plan(PlanArgs),
     /// Write a height field and its pyramid levels as images (heights.png/.exr, pyramid.png/.exr).
-    Pyramid(PyramidArgs),
+    Pyramid(pyramid::PyramidArgs),
     /// List the Vulkan devices and which one hfgi would choose.
     Devices,
     /// Write the embedded SPIR-V of every shader to a folder (for hosts building their own pipelines).
@@ -150,82 +147,22 @@ struct PlanArgs {
     /// Number of frames to plan (≥ 1): frame 0 with new heights, then static frames.
     #[arg(long, default_value_t = 1)]
     frames: u32,
-}
-
-#[derive(Args)]
-struct AnimateArgs {
-    /// Scene file (TOML) with an [animation] table (docs/scene-format.md).
-    scene: PathBuf,
-    /// Number of frames to render (≥ 1).
+    /// Vulkan device name substring to check the scene against (default: the device `render`
+    /// would choose, when one can be opened).
     #[arg(long)]
-    frames: u32,
-    /// Output folder for frame_0000.png, frame_0001.png, … (created if missing).
-    #[arg(long, default_value = "out/animate")]
-    out: PathBuf,
-    /// Override a scene setting, e.g. `--set animation.kind=water --set animation.rain_rate=1`.
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    overrides: Vec<String>,
-    /// Also write the frames as an animated GIF (looping).
-    #[arg(long, value_name = "FILE")]
-    gif: Option<PathBuf>,
-    /// Frame rate of the GIF, in (0, 100].
-    #[arg(long, default_value_t = 25.0)]
-    fps: f64,
-    /// Exposure in stops for the frames (default: the scene camera's).
-    #[arg(long, allow_hyphen_values = true)]
-    exposure: Option<f32>,
-    #[command(flatten)]
-    device: DeviceArgs,
-}
-
-#[derive(Args)]
-struct PyramidArgs {
-    /// Output folder (created if missing).
-    #[arg(long, default_value = "out")]
-    out: PathBuf,
-    /// Height field file: .png (8/16-bit grey), .exr (Y, R or height channel), .raw/.f32 (needs --raw-size).
-    #[arg(long, conflicts_with = "generator")]
-    heights: Option<PathBuf>,
-    /// Procedural height field: fbm, sines, cones, cliff, craters, city, optionally with
-    /// parameters, e.g. `fbm:seed=7,octaves=6`.
-    #[arg(long, default_value = "fbm")]
-    generator: String,
-    /// Size of a generated field, `N` or `WxH`.
-    #[arg(long, default_value = "256")]
-    size: String,
-    /// Size of a .raw/.f32 file, `WxH`.
-    #[arg(long)]
-    raw_size: Option<String>,
-    /// Multiplies every height read from a file.
-    #[arg(long, default_value_t = 1.0)]
-    height_scale: f32,
-    /// Pyramid level step k_v (levels per halving of resolution, ≥ 1).
-    #[arg(long, default_value_t = 4)]
-    level_step: u32,
-    /// Pyramid storage: `stack` (paper) or `pyramid` (B-spline on the fly).
-    #[arg(long, default_value = "stack")]
-    pyramid: String,
-    /// Treat the field as periodic.
-    #[arg(long)]
-    wrap: bool,
-    #[command(flatten)]
-    device: DeviceArgs,
-}
-
-fn parse_size(s: &str, what: &str) -> Result<(usize, usize)> {
-    let parse = |t: &str| t.trim().parse::<usize>().with_context(|| format!("{what} {s:?}: expected N or WxH"));
-    match s.split_once(['x', 'X', '×']) {
-        Some((w, h)) => Ok((parse(w)?, parse(h)?)),
-        None => {
-            let n = parse(s)?;
-            Ok((n, n))
-        }
-    }
+    device: Option<String>,
+    /// Do not open a Vulkan device: plan and estimate the memory only.
+    #[arg(long, conflicts_with = "device")]
+    no_device: bool,
 }
 
 pub(crate) fn context(d: &DeviceArgs) -> Result<Context> {
     let opts = ContextOptions { validation: d.validation.then_some(true), device_filter: d.device.clone() };
-    Context::headless_with(&opts).context("creating the Vulkan context")
+    let what = match &d.device {
+        Some(name) => format!("creating the Vulkan context for --device {name:?}"),
+        None => "creating the Vulkan context".to_string(),
+    };
+    Context::headless_with(&opts).context(what)
 }
 
 fn print_timings(ctx: &Context, timer: &StageTimer) {
@@ -252,8 +189,20 @@ pub(crate) fn load_scene_or_default(path: Option<&Path>, overrides: &[String]) -
     }
 }
 
+/// The exposure to use (`--exposure`, else the scene camera's), checked before any work.
+pub(crate) fn checked_exposure(flag: Option<f32>, scene: f32) -> Result<f32> {
+    let e = flag.unwrap_or(scene);
+    let m = hfgi::scene::model::limits::MAX_EXPOSURE_STOPS as f32;
+    if !(e.is_finite() && e.abs() <= m) {
+        let what = if flag.is_some() { "--exposure" } else { "camera.exposure" };
+        bail!("{what} {e}: expected a finite number of stops in [-{m}, {m}]");
+    }
+    Ok(e)
+}
+
 fn render(a: RenderArgs) -> Result<()> {
     let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
+    let exposure = checked_exposure(a.exposure, scene.camera.exposure)?;
     let outputs: Vec<&Path> = std::iter::once(&a.out)
         .chain([&a.view_exr, &a.shading_exr, &a.shading_png, &a.indirect_png, &a.heights_png].into_iter().flatten())
         .map(PathBuf::as_path)
@@ -261,10 +210,8 @@ fn render(a: RenderArgs) -> Result<()> {
     check_outputs(&outputs, a.scene.as_deref(), &a.overrides)?;
     let ctx = context(&a.device)?;
     let (w, h) = (scene.field.width(), scene.field.height());
-    let max = ctx.info().max_image_dimension_2d as usize;
-    if w > max || h > max {
-        bail!("height field {w}×{h} exceeds this device's maxImageDimension2D {max}");
-    }
+    // The same checks `hfgi plan` runs, before any GPU work.
+    hfgi::frame::memory::check_device(&scene, ctx.info()).context("checking the scene against the device")?;
     let gi = &scene.gi;
     eprintln!(
         "device: {} ({}); field {w}×{h}; n={} m={} k_v={} o_v={} subsample={} {} {}",
@@ -304,7 +251,6 @@ fn render(a: RenderArgs) -> Result<()> {
     timer.destroy(&ctx);
     let (layers, image) = read?;
     ctx.check_validation()?;
-    let exposure = a.exposure.unwrap_or(scene.camera.exposure);
     let (vw, vh) = (vw as usize, vh as usize);
     // Every output or none (docs/robustness.md).
     let mut wrote = Vec::new();
@@ -355,12 +301,16 @@ fn render(a: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// Most frames `hfgi plan` lists.
+const MAX_PLAN_FRAMES: u32 = 10_000;
+
 fn plan(a: PlanArgs) -> Result<()> {
-    if a.frames == 0 {
-        bail!("--frames 0: expected at least 1 frame");
+    if !(1..=MAX_PLAN_FRAMES).contains(&a.frames) {
+        bail!("--frames {}: expected 1..={MAX_PLAN_FRAMES} frames (static frames repeat after two)", a.frames);
     }
     let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
     scene.gi.validate().context("checking the [gi] settings")?;
+    let memory = plan_memory(&scene, &a)?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let name = a.scene.as_ref().map_or("default scene".to_string(), |p| p.display().to_string());
     let animated = scene.animation != Animation::None;
@@ -369,32 +319,59 @@ fn plan(a: PlanArgs) -> Result<()> {
     } else {
         String::new()
     };
-    println!("scene {name}: {w}×{h}, gi.bounces = {}, gi.amortize = {}{motion}", scene.gi.bounces, scene.gi.amortize);
-    println!("resolved knobs: {}", scene.gi.describe());
+    let mut text = format!(
+        "scene {name}: {w}×{h}, gi.bounces = {}, gi.amortize = {}{motion}\n",
+        scene.gi.bounces, scene.gi.amortize
+    );
+    text += &format!("resolved knobs: {}\n", scene.gi.describe());
     let planner = hfgi::frame::Planner::new(&scene);
     for f in 0..u64::from(a.frames) {
         let p = planner.plan(&hfgi::frame::FrameState { heights_changed: f == 0 || animated, frame_index: f });
         if f == 0 {
-            print!("{}", p.passes_text());
+            text += &p.passes_text();
         }
-        print!("{p}");
+        text += &p.to_string();
     }
-    Ok(())
+    text += &memory;
+    write_stdout(&text)
 }
 
-/// The picture of the current frame: `(width, height, linear RGB)`, the rasterised view image.
-fn frame_rgb(ctx: &Context, view: &ViewPass) -> hfgi::Result<(usize, usize, Vec<[f32; 3]>)> {
-    let (w, h) = view.size();
-    Ok((w as usize, h as usize, view.read_hdr(ctx)?))
+/// `plan`'s memory section: the estimate without a device ([`hfgi::frame::memory`]), then —
+/// unless `--no-device` — the checks `render` runs against the device, when one can be opened.
+fn plan_memory(scene: &hfgi::scene::model::Scene, a: &PlanArgs) -> Result<String> {
+    use hfgi::frame::memory;
+    let renderer = memory::renderer(scene).context("estimating the renderer's GPU memory")?;
+    let view = memory::view(scene, &hfgi::frame::view::ViewOptions::default())
+        .context("estimating the view pass's GPU memory")?;
+    let mib = |b: u64| b as f64 / 1048576.0;
+    let mut text = format!(
+        "GPU memory: {:.2} MiB = renderer {:.2} MiB + view ≤ {:.2} MiB (at most 8× MSAA; docs/plan.md)\n",
+        mib(renderer.total() + view.total()),
+        mib(renderer.total()),
+        mib(view.total())
+    );
+    if let Some((name, b)) = renderer.largest() {
+        text += &format!("  largest buffer: {name} {:.2} MiB\n", mib(*b));
+    }
+    if a.no_device {
+        return Ok(text);
+    }
+    let opts = ContextOptions { validation: Some(false), device_filter: a.device.clone() };
+    match Context::headless_with(&opts) {
+        Ok(ctx) => {
+            memory::check_device(scene, ctx.info())
+                .with_context(|| format!("checking the scene against {}", ctx.info().name))?;
+            let heap = mib(ctx.info().device_local_heap_bytes);
+            text += &format!("device {}: fits (largest device-local heap {heap:.0} MiB)\n", ctx.info().name);
+        }
+        Err(e) if a.device.is_some() => return Err(anyhow::Error::new(e).context("opening --device")),
+        Err(e) => text += &format!("no Vulkan device opened ({e}): memory not checked against a heap\n"),
+    }
+    Ok(text)
 }
 
-/// What advances the heights between frames.
-enum Driver {
-    Water(Box<WaterSim>),
-    Bumps(MovingBumps),
-}
-
-fn median(v: &mut [f64]) -> f64 {
+/// The median of `v` (sorted in place); NaN when empty.
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
     if n == 0 {
@@ -406,307 +383,18 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-fn animate(a: AnimateArgs) -> Result<()> {
-    if a.frames == 0 {
-        bail!("--frames 0: expected at least 1 frame");
-    }
-    if !(a.fps.is_finite() && a.fps > 0.0 && a.fps <= 100.0) {
-        bail!("--fps {}: expected a number in (0, 100]", a.fps);
-    }
-    let scene = hfgi::scene::file::load_scene(&a.scene, &a.overrides)
-        .with_context(|| format!("loading scene {}", a.scene.display()))?;
-    let first = a.out.join("frame_0000.png");
-    check_outputs(
-        &std::iter::once(&first).chain(&a.gif).map(PathBuf::as_path).collect::<Vec<_>>(),
-        Some(&a.scene),
-        &a.overrides,
-    )?;
-    if scene.animation == Animation::None {
-        bail!(
-            "{}: the scene does not move ([animation] kind = \"none\"); add an [animation] table \
-             (docs/scene-format.md) or e.g. --set animation.kind=water",
-            a.scene.display()
-        );
-    }
-    let exposure = a.exposure.unwrap_or(scene.camera.exposure);
-    if !exposure.is_finite() {
-        bail!("--exposure {exposure}: expected a finite number of stops");
-    }
-    let ctx = context(&a.device)?;
-    let (w, h) = (scene.field.width(), scene.field.height());
-    let max = ctx.info().max_image_dimension_2d as usize;
-    if w > max || h > max {
-        bail!("height field {w}×{h} exceeds this device's maxImageDimension2D {max}");
-    }
-    eprintln!(
-        "device: {} ({}); field {w}×{h}; animation {}; {} frames",
-        ctx.info().name,
-        ctx.info().driver,
-        scene.animation.kind(),
-        a.frames
-    );
-    let mut renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
-    let driver = match &scene.animation {
-        Animation::Water(p) => {
-            // The scene's heights are the initial surface: z = (height − rest_level) / scale.
-            let initial: Vec<f32> =
-                scene.field.data().iter().map(|&v| ((f64::from(v) - p.rest_level) / p.scale) as f32).collect();
-            WaterSim::new(&ctx, w, h, p.clone(), &initial).map(|s| Driver::Water(Box::new(s)))
-        }
-        Animation::Bumps(p) => {
-            MovingBumps::new(p.clone(), scene.field.clone(), scene.texel_size, scene.wrap).map(Driver::Bumps)
-        }
-        Animation::None => Err(hfgi::Error::param("animation.kind", "\"none\"", "\"water\" or \"bumps\"")),
-    };
-    let mut driver = match driver {
-        Ok(d) => d,
-        Err(e) => {
-            renderer.destroy(&ctx);
-            return Err(e).context("creating the animation");
-        }
-    };
-    let steps = match &driver {
-        Driver::Water(sim) => sim.params().steps_per_frame,
-        Driver::Bumps(_) => 0,
-    };
-    // Near/far planes: the first frame's range, widened for water by the waves a drop can
-    // raise (4 × the drop amplitude, in world units); bumps update it every frame.
-    let (lo, hi) = scene.field.range();
-    let margin = match &scene.animation {
-        Animation::Water(p) => (4.0 * p.rain.amplitude.abs().max(1.0) * p.scale.abs()) as f32,
-        _ => 0.0,
-    };
-    let mut view = match ViewPass::for_renderer(&ctx, &scene, &renderer, &ViewOptions::default())
-        .and_then(|mut v| v.set_height_range(lo - margin, hi + margin).map(|_| v))
-    {
-        Ok(v) => v,
-        Err(e) => {
-            if let Driver::Water(sim) = driver {
-                sim.destroy(&ctx);
-            }
-            renderer.destroy(&ctx);
-            return Err(anyhow::Error::new(e).context("creating the view pass"));
-        }
-    };
-    let mut timer = match StageTimer::new(&ctx, steps + 32 + 5 * scene.gi.bounces) {
-        Ok(t) => t,
-        Err(e) => {
-            if let Driver::Water(sim) = driver {
-                sim.destroy(&ctx);
-            }
-            renderer.destroy(&ctx);
-            return Err(e.into());
-        }
-    };
-
-    let pipelines_before = ctx.pipelines_created();
-    let bar = indicatif::ProgressBar::new(u64::from(a.frames));
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{msg} {wide_bar} {pos}/{len} frames [{elapsed} < {eta}]")
-    {
-        bar.set_style(style);
-    }
-    bar.set_message("animate");
-    let mut stage_ms: Vec<(String, Vec<f64>)> = Vec::new();
-    let mut timing_note = None;
-    let mut gif_frames = Vec::new();
-    let run = (|| -> Result<()> {
-        for f in 0..a.frames {
-            if let Driver::Bumps(b) = &driver {
-                let field = b.heights_at(u64::from(f))?;
-                renderer.update_heights(&ctx, &field)?;
-                let (lo, hi) = field.range();
-                view.set_height_range(lo, hi)?;
-            }
-            ctx.submit_and_wait(|cmd| {
-                let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
-                if let Driver::Water(sim) = &mut driver {
-                    for _ in 0..steps {
-                        sim.record_step(&mut rec, renderer.heights_buffer())?;
-                    }
-                    renderer.mark_heights_changed();
-                }
-                renderer.record(&mut rec);
-                view.record(&mut rec);
-                Ok(())
-            })?;
-            match timer.timings(&ctx) {
-                Ok(t) => {
-                    // Sum the scopes of one stage within the frame (several water steps).
-                    let mut frame: Vec<(String, f64)> = Vec::new();
-                    for (name, ms) in t {
-                        match frame.iter_mut().find(|(n, _)| *n == name) {
-                            Some((_, acc)) => *acc += ms,
-                            None => frame.push((name, ms)),
-                        }
-                    }
-                    for (name, ms) in frame {
-                        match stage_ms.iter_mut().find(|(n, _)| *n == name) {
-                            Some((_, v)) => v.push(ms),
-                            None => stage_ms.push((name, vec![ms])),
-                        }
-                    }
-                }
-                Err(e) => timing_note = Some(e.to_string()),
-            }
-            let (fw, fh, rgb) = frame_rgb(&ctx, &view)?;
-            let path = a.out.join(format!("frame_{f:04}.png"));
-            hfgi::io::png::write_tonemapped(&path, fw, fh, &rgb, exposure)?;
-            if a.gif.is_some() {
-                gif_frames.push((fw, fh, hfgi::io::gif::tonemap_rgba8(&rgb, exposure)?));
-            }
-            bar.inc(1);
-        }
-        Ok(())
-    })();
-    bar.finish_and_clear();
-    let pipelines_after = ctx.pipelines_created();
-    let stats = renderer.stats();
-    let memory = renderer.memory_bytes() + view.memory_bytes();
-    if let Driver::Water(sim) = driver {
-        sim.destroy(&ctx);
-    }
-    view.destroy(&ctx);
-    renderer.destroy(&ctx);
-    timer.destroy(&ctx);
-    run?;
-    ctx.check_validation()?;
-    eprintln!("wrote {}/frame_0000.png … frame_{:04}.png ({} frames)", a.out.display(), a.frames - 1, a.frames);
-    if let (Some(path), Some((fw, fh, _))) = (&a.gif, gif_frames.first()) {
-        let (fw, fh) = (*fw, *fh);
-        let frames: Vec<Vec<u8>> = gif_frames.into_iter().map(|(_, _, f)| f).collect();
-        hfgi::io::gif::write_gif(path, fw, fh, &frames, a.fps)?;
-        eprintln!("wrote {} ({} fps)", path.display(), a.fps);
-    }
-    eprintln!("frames: {}", a.frames);
-    eprintln!("renderer stats: frames {}, pyramid_builds {}", stats.frames, stats.pyramid_builds);
-    eprintln!("pipelines created: {pipelines_before} before the loop, {pipelines_after} after");
-    eprintln!("GPU memory (renderer + view): {:.2} MiB", memory as f64 / 1048576.0);
-    let lavapipe = ctx.info().kind == ash::vk::PhysicalDeviceType::CPU;
-    let label = if lavapipe { " (lavapipe: CPU time, not a GPU time)" } else { "" };
-    match timing_note {
-        Some(note) if stage_ms.is_empty() => eprintln!("no stage timings: {note}"),
-        _ => {
-            eprintln!("median per-stage time over {} frames, {} ({}):", a.frames, ctx.info().name, ctx.info().driver);
-            for (stage, mut v) in stage_ms {
-                eprintln!("  {stage:<24} {:9.3} ms{label} ({} frames)", median(&mut v), v.len());
-            }
-        }
-    }
-    if pipelines_after != pipelines_before {
-        bail!("pipelines were created during the frame loop ({pipelines_before} → {pipelines_after})");
-    }
-    Ok(())
-}
-
-fn load_field(a: &PyramidArgs, max_dim: u32) -> Result<HeightField> {
-    if let Some(path) = &a.heights {
-        let raw_size = a.raw_size.as_deref().map(|s| parse_size(s, "--raw-size")).transpose()?;
-        let opts = LoadOptions { height_scale: a.height_scale, raw_size, max_dim, ..LoadOptions::default() };
-        return load_heightfield(path, &opts).with_context(|| format!("loading height field {}", path.display()));
-    }
-    let (w, h) = parse_size(&a.size, "--size")?;
-    let gen: Generator = a.generator.parse().with_context(|| format!("--generator {:?}", a.generator))?;
-    gen.generate(w, h).with_context(|| format!("generating {}×{} field with {:?}", w, h, a.generator))
-}
-
-fn pyramid(a: PyramidArgs) -> Result<()> {
-    let mode: PyramidMode = a.pyramid.parse().context("--pyramid")?;
-    let [heights_png, heights_exr, pyramid_exr, pyramid_png] =
-        ["heights.png", "heights.exr", "pyramid.exr", "pyramid.png"].map(|n| a.out.join(n));
-    let inputs: Vec<&Path> = a.heights.iter().map(PathBuf::as_path).collect();
-    hfgi::io::atomic::check_outputs(
-        &[&heights_png, &heights_exr, &pyramid_exr, &pyramid_png].map(PathBuf::as_path),
-        &inputs,
-    )?;
-    let ctx = context(&a.device)?;
-    let field = load_field(&a, ctx.info().max_image_dimension_2d)?;
-    let (w, h) = (field.width(), field.height());
-    eprintln!("device: {} ({}), field {w}×{h}, k_v = {}, {mode}", ctx.info().name, ctx.info().driver, a.level_step);
-
-    let pyr =
-        HeightPyramid::new(&ctx, w, h, (w, h), a.level_step, mode, a.wrap).context("creating the height pyramid")?;
-    pyr.upload(&ctx, &field)?;
-    let mut timer = StageTimer::new(&ctx, 32)?;
-    ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
-        pyr.record(&mut rec);
-        Ok(())
-    })?;
-    print_timings(&ctx, &timer);
-    eprintln!("  pyramid memory: {:.2} MiB ({} levels)", pyr.memory_bytes() as f64 / 1048576.0, pyr.layout().count());
-
-    // The four files together or none (docs/robustness.md).
-    let written = hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
-        hfgi::io::png::write_gray_normalized(&heights_png, w, h, field.data())?;
-        hfgi::io::exr::write_scalar(&heights_exr, w, h, "height", field.data())?;
-
-        // Levels, each B-spline resampled to full resolution (the stack, or the same filter on the fly).
-        let count = pyr.layout().count();
-        let mut planes = Vec::with_capacity(count);
-        for i in 0..count {
-            let plane = match mode {
-                PyramidMode::Stack => pyr.read_stack(&ctx, i)?,
-                PyramidMode::Pyramid => {
-                    let q: Vec<[f32; 3]> = (0..w * h).map(|k| [i as f32, (k % w) as f32, (k / w) as f32]).collect();
-                    pyr.probe(&ctx, &q)?
-                }
-            };
-            planes.push(plane);
-        }
-        let names: Vec<String> = (0..count).map(|i| format!("level_{i:02}")).collect();
-        let layers: Vec<hfgi::io::exr::Layer> = planes
-            .iter()
-            .zip(&names)
-            .map(|(p, n)| hfgi::io::exr::Layer { name: n.as_str(), channels: vec![("height", p.as_slice())] })
-            .collect();
-        hfgi::io::exr::write_layers(&pyramid_exr, w, h, &layers)?;
-        let sheet = contact_sheet(&planes, w, h, field.range());
-        hfgi::io::png::write_tonemapped(&pyramid_png, sheet.1, sheet.2, &sheet.0, 0.0)?;
-        Ok(())
-    });
-    pyr.destroy(&ctx);
-    timer.destroy(&ctx);
-    written?;
-    ctx.check_validation()?;
-    eprintln!("wrote {}/{{heights.png, heights.exr, pyramid.png, pyramid.exr}}", a.out.display());
-    Ok(())
-}
-
-/// Every k-th level side by side (4 per row), grey-scaled by the field's range.
-fn contact_sheet(planes: &[Vec<f32>], w: usize, h: usize, range: (f32, f32)) -> (Vec<[f32; 3]>, usize, usize) {
-    let step = (planes.len() / 8).max(1);
-    let picks: Vec<&Vec<f32>> = planes.iter().step_by(step).take(8).collect();
-    let cols = picks.len().min(4);
-    let rows = picks.len().div_ceil(cols);
-    let (sw, sh) = (cols * (w + 4), rows * (h + 4));
-    let mut img = vec![[0.0f32; 3]; sw * sh];
-    let span = (range.1 - range.0).max(f32::MIN_POSITIVE);
-    for (n, p) in picks.iter().enumerate() {
-        let (ox, oy) = ((n % cols) * (w + 4) + 2, (n / cols) * (h + 4) + 2);
-        for y in 0..h {
-            for x in 0..w {
-                // Linear value whose sRGB encoding is proportional to the height.
-                let g = ((p[y * w + x] - range.0) / span).clamp(0.0, 1.0);
-                let lin = if g <= 0.04045 { g / 12.92 } else { ((g + 0.055) / 1.055).powf(2.4) };
-                img[(oy + y) * sw + ox + x] = [lin; 3];
-            }
-        }
-    }
-    (img, sw, sh)
-}
-
 fn devices() -> Result<()> {
     let list = Context::list_devices().context("listing Vulkan devices")?;
     if list.is_empty() {
         bail!("no Vulkan 1.3 device found; install mesa-vulkan-drivers for lavapipe");
     }
+    let mut text = String::new();
     for (name, kind) in &list {
-        println!("{name} ({kind:?})");
+        text += &format!("{name} ({kind:?})\n");
     }
     let ctx = Context::headless_with(&ContextOptions { validation: Some(false), device_filter: None })?;
     let i = ctx.info();
-    println!(
+    text += &format!(
         "chosen: {} — driver {}, Vulkan {}.{}.{}, maxImageDimension2D {}, timestamps: {}",
         i.name,
         i.driver,
@@ -720,7 +408,7 @@ fn devices() -> Result<()> {
             "none".into()
         }
     );
-    Ok(())
+    write_stdout(&text)
 }
 
 /// Rejects output paths that cannot work (a directory, an input of the scene, the same file
@@ -733,28 +421,57 @@ pub fn check_outputs(outputs: &[&Path], scene: Option<&Path>, overrides: &[Strin
 }
 
 fn spirv(out: &Path) -> Result<()> {
-    for s in hfgi::shaders::ALL {
-        let path = out.join(format!("{}.spv", s.name));
-        if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let paths: Vec<PathBuf> = hfgi::shaders::ALL.iter().map(|s| out.join(format!("{}.spv", s.name))).collect();
+    hfgi::io::atomic::check_outputs(&paths.iter().map(PathBuf::as_path).collect::<Vec<_>>(), &[])?;
+    // Every module or none (docs/robustness.md).
+    hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
+        for (s, path) in hfgi::shaders::ALL.iter().zip(&paths) {
+            if let Some(dir) = path.parent() {
+                std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            }
+            hfgi::io::atomic::write_bytes(path, bytemuck::cast_slice::<u32, u8>(s.words))?;
         }
-        hfgi::io::atomic::write_bytes(&path, bytemuck::cast_slice::<u32, u8>(s.words))?;
-        println!("{}", path.display());
-    }
-    Ok(())
+        Ok(())
+    })?;
+    let list: String = paths.iter().map(|p| format!("{}\n", p.display())).collect();
+    write_stdout(&list)
 }
 
-fn main() -> Result<()> {
+/// Writes `text` to standard output and flushes it: a failing write (a full disk, a closed
+/// pipe) is an error and a non-zero exit, not ignored (docs/robustness.md, "Messages").
+fn write_stdout(text: &str) -> Result<()> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes()).and_then(|()| out.flush()).context("writing to standard output")
+}
+
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
-    match cli.command {
+    let result = match cli.command {
         Command::Render(a) => render(a),
-        Command::Animate(a) => animate(a),
+        Command::Animate(a) => animate::animate(a),
         Command::Reference(a) => reference::reference(a),
         Command::Bench(a) => bench::bench(a),
         Command::Export(a) => export::export(a),
         Command::Plan(a) => plan(a),
-        Command::Pyramid(a) => pyramid(a),
+        Command::Pyramid(a) => pyramid::pyramid(a),
         Command::Devices => devices(),
         Command::Spirv { out } => spirv(&out),
+    };
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            // Every line kept short: no message echoes a 200 KB line back (docs/robustness.md).
+            let mut text = format!("Error: {e}");
+            let causes: Vec<String> = e.chain().skip(1).map(|c| c.to_string()).collect();
+            if !causes.is_empty() {
+                text += "\n\nCaused by:";
+                for c in causes {
+                    text += &format!("\n    {}", c.replace('\n', "\n    "));
+                }
+            }
+            eprintln!("{}", hfgi::error::shorten_lines(&text, hfgi::error::LINE_MAX_CHARS));
+            std::process::ExitCode::FAILURE
+        }
     }
 }

@@ -63,6 +63,7 @@ fn progress_bar(what: &str) -> indicatif::ProgressBar {
 
 pub fn reference(a: ReferenceArgs) -> Result<()> {
     let scene = load_scene_or_default(a.scene.as_deref(), &a.overrides)?;
+    let exposure = super::checked_exposure(a.exposure, scene.camera.exposure)?;
     let outputs: Vec<&Path> = std::iter::once(&a.shading_exr).chain(&a.shading_png).map(PathBuf::as_path).collect();
     super::check_outputs(&outputs, a.scene.as_deref(), &a.overrides)?;
     let settings = TruthSettings {
@@ -74,6 +75,7 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
         cap_nodes: a.cap_nodes,
     };
     settings.validate().context("reference settings")?;
+    settings.check_work(&scene).context("reference settings")?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let kind = if a.sh_visibility { "SH-visibility" } else { "exact" };
     let bar = progress_bar(&format!("{kind} reference"));
@@ -117,7 +119,7 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
             &[("", &total), ("direct", &direct), ("indirect", &indirect), ("glossy", &glossy)],
         )?;
         if let Some(p) = &a.shading_png {
-            hfgi::io::png::write_tonemapped(p, w, h, &total, a.exposure.unwrap_or(scene.camera.exposure))?;
+            hfgi::io::png::write_tonemapped(p, w, h, &total, exposure)?;
         }
         Ok(())
     })?;

@@ -1,0 +1,201 @@
+//! The pure GPU-memory estimate (`hfgi::frame::memory`) against what the renderer and the view
+//! pass really allocate on the validated test context: the renderer's total equals
+//! `Renderer::memory_bytes()` exactly; the view pass's equals `ViewPass::memory_bytes()` where the
+//! driver does not pad its images (and is at most it elsewhere); the entries are, name for name,
+//! the allocations the allocator holds for each.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use hfgi::frame::memory::{self, MemoryEstimate, ViewTargets};
+use hfgi::frame::view::{ViewOptions, ViewPass};
+use hfgi::frame::Renderer;
+use hfgi::scene::file::parse_scene;
+use hfgi::scene::model::Scene;
+use hfgi::vk::Context;
+
+/// A scene from TOML `text` and `--set` overrides.
+fn scene_of(text: &str, overrides: &[&str]) -> Scene {
+    let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    parse_scene(text, Path::new("."), "test", &o).unwrap_or_else(|e| panic!("{overrides:?}: {e}"))
+}
+
+/// The covered cases: `(label, TOML text, overrides)`. Small fields, some non-square; a small
+/// odd camera keeps the view images cheap (the default 960×540 one is in the list once).
+fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
+    let small = ["heightfield.size=[37,50]", "camera.width=97", "camera.height=61"];
+    let with = |extra: &[&'static str]| small.iter().chain(extra).copied().collect::<Vec<_>>();
+    let glossy = "material.specular=[0.2,0.2,0.2]";
+    vec![
+        ("direct only", "", with(&[])),
+        ("default camera", "", vec!["heightfield.size=[40,24]", "gi.bounces=1"]),
+        ("subsample 2, 1 bounce", "", with(&["gi.subsample=2", "gi.bounces=1"])),
+        ("subsample 4, 3 bounces", "", with(&["gi.subsample=4", "gi.bounces=3", "heightfield.size=[64,41]"])),
+        ("pyramid mode, 1 bounce", "", with(&["gi.pyramid=\"pyramid\"", "gi.bounces=1"])),
+        ("pyramid mode, subsample 2", "", with(&["gi.pyramid=\"pyramid\"", "gi.subsample=2", "gi.bounces=3"])),
+        ("wrap, 1 bounce", "", with(&["heightfield.wrap=true", "gi.bounces=1"])),
+        ("glossy scalar", "", with(&[glossy, "gi.bounces=1", "gi.glossy_pyramid=\"scalar\""])),
+        ("glossy vector", "", with(&[glossy, "gi.bounces=1", "gi.glossy_pyramid=\"vector\""])),
+        (
+            "glossy vector, pyramid, n=2",
+            "",
+            with(&[glossy, "gi.bounces=3", "gi.glossy_pyramid=\"vector\"", "gi.pyramid=\"pyramid\"", "gi.sh_order=2"]),
+        ),
+        ("vector asked, no specular", "", with(&["gi.bounces=1", "gi.glossy_pyramid=\"vector\""])),
+        ("black surface", "", with(&["gi.bounces=1", "material.albedo=[0,0,0]"])),
+        ("draft", "", with(&["gi.quality=\"draft\"", "gi.bounces=1"])),
+        ("default", "", with(&["gi.quality=\"default\"", "gi.bounces=1"])),
+        ("high", "", with(&["gi.quality=\"high\"", "gi.bounces=1", "heightfield.size=[33,20]"])),
+        ("paper", "", with(&["gi.quality=\"paper\"", "gi.bounces=1"])),
+        ("no key light", "", with(&["key_light=[]", "gi.bounces=1"])),
+        ("no environment", "[[key_light]]\n", with(&["gi.bounces=1"])),
+        ("unlit", "key_light = []\n", with(&["gi.bounces=1"])),
+        ("sh order 2", "", with(&["gi.sh_order=2", "gi.bounces=1"])),
+        ("sh order 6", "", with(&["gi.sh_order=6", "gi.bounces=1", "heightfield.size=[20,31]"])),
+    ]
+}
+
+/// The live allocations of `ctx`'s allocator: the sizes under each name (the allocator's
+/// chunk sizes, which may include alignment; only the names are compared).
+fn live(ctx: &Context) -> BTreeMap<String, Vec<u64>> {
+    let report = ctx.allocator().lock().unwrap().generate_report();
+    let mut out: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    for a in report.allocations {
+        out.entry(a.name).or_default().push(a.size);
+    }
+    out
+}
+
+/// What `make` allocates and keeps: the allocations under names that `ctx` did not hold
+/// before (the tests use each name once at a time).
+fn allocated_by<T>(ctx: &Context, make: impl FnOnce() -> T) -> (T, BTreeMap<String, Vec<u64>>) {
+    let before = live(ctx);
+    let made = make();
+    let mut after = live(ctx);
+    after.retain(|name, _| !before.contains_key(name));
+    (made, after)
+}
+
+/// The estimate's entries by name (a name may repeat).
+fn by_name(e: &MemoryEstimate) -> BTreeMap<String, Vec<u64>> {
+    let mut out: BTreeMap<String, Vec<u64>> = BTreeMap::new();
+    for (n, b) in &e.buffers {
+        out.entry(n.clone()).or_default().push(*b);
+    }
+    out
+}
+
+fn names(m: &BTreeMap<String, Vec<u64>>) -> Vec<(&String, usize)> {
+    m.iter().map(|(n, v)| (n, v.len())).collect()
+}
+
+/// Checks one scene: totals and names of the renderer and of the view pass.
+fn check(ctx: &Context, label: &str, scene: &Scene) {
+    let est = memory::renderer(scene).unwrap_or_else(|e| panic!("{label}: {e}"));
+    assert!(by_name(&est).values().all(|v| v.len() == 1), "{label}: duplicate names in {:?}", est.buffers);
+    let (renderer, made) = allocated_by(ctx, || Renderer::new(ctx, scene).unwrap_or_else(|e| panic!("{label}: {e}")));
+    assert_eq!(est.total(), renderer.memory_bytes(), "{label}: renderer estimate\n{est}");
+    assert_eq!(names(&by_name(&est)), names(&made), "{label}: renderer buffer names");
+    let largest = est.largest().unwrap();
+    assert!(est.buffers.iter().all(|(_, b)| *b <= largest.1), "{label}: largest {largest:?}");
+
+    let opts = ViewOptions::default();
+    let (view, made) = allocated_by(ctx, || {
+        ViewPass::for_renderer(ctx, scene, &renderer, &opts).unwrap_or_else(|e| panic!("{label}: {e}"))
+    });
+    let targets =
+        ViewTargets { color_format: view.color_format(), depth_format: view.depth_format(), samples: view.samples() };
+    let vest = memory::view_with(scene, &targets).unwrap();
+    let vnames = by_name(&vest);
+    assert_eq!(names(&vnames), names(&made), "{label}: view names");
+    // Images are nominal: at most what the driver asks for (the pass reports the driver's size).
+    assert!(vnames["hfgi.view.output"][0] <= view.image().size_bytes(), "{label}: output image");
+    // Where the driver does not pad (lavapipe: 4×4-pixel blocks, 64-byte rows), the whole pass,
+    // images and index buffer, is exact.
+    let (cw, ch) = view.size();
+    let unpadded = ctx.info().driver.to_lowercase().contains("llvmpipe") && cw % 16 == 0 && ch % 4 == 0;
+    if unpadded {
+        assert_eq!(vest.total(), view.memory_bytes(), "{label}: view estimate for {targets:?}\n{vest}");
+    }
+    assert!(vest.total() <= view.memory_bytes(), "{label}: view estimate for {targets:?}\n{vest}");
+    let bound = memory::view(scene, &opts).unwrap();
+    assert!(bound.total() >= vest.total(), "{label}: view() {} < view_with() {}", bound.total(), vest.total());
+    println!(
+        "{label:<28} renderer {:>8} B = memory_bytes ({:>2} buffers); view {cw}×{ch} {:?} ×{}: {:>8} B, \
+         memory_bytes {:>8} B (driver padding {}){}",
+        est.total(),
+        est.buffers.len(),
+        targets.color_format,
+        targets.samples,
+        vest.total(),
+        view.memory_bytes(),
+        view.memory_bytes() - vest.total(),
+        if unpadded { ", checked equal" } else { "" }
+    );
+    view.destroy(ctx);
+    renderer.destroy(ctx);
+}
+
+#[test]
+fn estimate_equals_what_the_passes_allocate() {
+    let g = common::gpu();
+    for (label, text, overrides) in cases() {
+        check(&g, label, &scene_of(text, &overrides));
+    }
+    let messages = common::finish(g);
+    assert!(messages.is_empty(), "validation messages: {messages:?}");
+}
+
+#[test]
+fn estimate_follows_the_forced_sample_count() {
+    let scene = scene_of("", &["heightfield.size=[37,50]", "camera.width=97", "camera.height=61"]);
+    let names = |s: u32| {
+        let e = memory::view(&scene, &ViewOptions { samples: Some(s) }).unwrap();
+        (e.buffers.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(), e.total())
+    };
+    let (one, t1) = names(1);
+    let (four, t4) = names(4);
+    assert_eq!(one, ["hfgi.view.output", "hfgi.view.depth", "hfgi.view.index"]);
+    assert_eq!(four, ["hfgi.view.output", "hfgi.view.depth", "hfgi.view.msaa", "hfgi.view.index"]);
+    // Output 16 B/px once; depth 4 B/px and colour 16 B/px per sample; 6 u32 indices per quad of a row.
+    let px = 97 * 61;
+    assert_eq!(t1, px * (16 + 4) + 36 * 4 * 6);
+    assert_eq!(t4, px * (16 + 4 * 4 + 16 * 4) + 36 * 4 * 6);
+    assert!(memory::view(&scene, &ViewOptions { samples: Some(3) }).is_err());
+}
+
+#[test]
+fn estimate_rejects_what_the_renderer_rejects() {
+    let scene = scene_of("", &["heightfield.size=[37,50]"]);
+    let mut bad = scene.clone();
+    bad.gi.subsample = 3;
+    assert!(memory::renderer(&bad).is_err());
+    let mut bad = scene.clone();
+    bad.gi.level_step = 0;
+    assert!(memory::renderer(&bad).is_err());
+}
+
+/// The figures for issue 12's documentation: a 512² field, default preset, 1 bounce, at each
+/// sub-sampling (no device).
+#[test]
+fn estimate_512_by_subsample() {
+    for sub in [1, 2, 4] {
+        let s = format!("gi.subsample={sub}");
+        let scene = scene_of("", &["heightfield.size=512", "gi.quality=\"default\"", "gi.bounces=1", s.as_str()]);
+        let r = memory::renderer(&scene).unwrap();
+        let v = memory::view(&scene, &ViewOptions::default()).unwrap();
+        assert!(r.total() > 0 && v.total() > 0);
+        let largest = r.largest().unwrap();
+        println!(
+            "512², default, 1 bounce, subsample {sub}: renderer {} B ({:.2} MiB; largest {} {:.2} MiB), view (960×540, ≤ 8 samples) {} B ({:.2} MiB)\n{r}",
+            r.total(),
+            r.total() as f64 / 1048576.0,
+            largest.0,
+            largest.1 as f64 / 1048576.0,
+            v.total(),
+            v.total() as f64 / 1048576.0
+        );
+    }
+}
