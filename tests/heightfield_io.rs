@@ -858,3 +858,19 @@ fn fuzz_envmap_claiming_a_huge_size_is_rejected_before_allocating() {
     assert!(matches!(e, Error::Format { .. }), "{e:?}");
     assert_msg(&e.to_string(), &path, &["1073741815×4", "3 channel(s)", "samples"]);
 }
+
+/// A 564-byte tiled EXR of 8×8 pixels whose tiles are 83886144×64: exr allocates and zeroes a
+/// buffer of up to one tile (here the 1.6 GB a chunk claimed) before reading a block, so the
+/// loaders took 1.6 GB before failing at the end of the file. Blocks are now checked against
+/// `MAX_EXR_BLOCK_BYTES` from the header, by both EXR loaders.
+#[test]
+fn fuzz_exr_with_huge_tiles_is_rejected_from_its_header() {
+    let dir = tmp();
+    let path = dir.path().join("tiles.exr");
+    std::fs::write(&path, include_bytes!("../fuzz/seeds/heights_exr/oom-huge-tile.exr")).unwrap();
+    let (e, msg) = load_err(&path, &opts());
+    assert!(matches!(e, Error::Format { .. }), "{e:?}");
+    assert_msg(&msg, &path, &["tiles of 83886144×64 pixels", "at most 67108864"]);
+    let msg = hfgi::scene::envmap::load_equirect_exr(&path).unwrap_err().to_string();
+    assert_msg(&msg, &path, &["tiles of 83886144×64 pixels"]);
+}

@@ -133,7 +133,9 @@ pub fn project_equirect(width: usize, height: usize, rgb: &[[f32; 3]], n: usize,
 /// Errors: [`Error::Io`] / [`Error::Format`] for unreadable or corrupt files and missing
 /// channels (the message lists the channels found), [`Error::NonFinite`] for a NaN or infinite
 /// sample (naming its pixel), [`Error::Format`] for a file whose header claims more than
-/// [`MAX_ENV_SAMPLES`] samples (checked before any pixel memory is allocated).
+/// [`MAX_ENV_SAMPLES`] samples or blocks larger than
+/// [`MAX_EXR_BLOCK_BYTES`](crate::scene::load::MAX_EXR_BLOCK_BYTES) (checked before any pixel
+/// memory is allocated).
 pub fn load_equirect_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>)> {
     check_env_samples(path)?;
     let (w, h, channels) = read_layers(path)?;
@@ -178,8 +180,9 @@ pub fn load_equirect_exr(path: &Path) -> Result<(usize, usize, Vec<[f32; 3]>)> {
 /// 1073741815×4 pixels took more than 8 GB (found by fuzzing, docs/robustness.md "Fuzzing").
 pub const MAX_ENV_SAMPLES: usize = 3 * 8192 * 4096;
 
-/// Rejects a file whose headers claim more than [`MAX_ENV_SAMPLES`] samples. A header that
-/// cannot be read is left to [`read_layers`], which reports it.
+/// Rejects a file whose headers claim more than [`MAX_ENV_SAMPLES`] samples or blocks larger
+/// than [`crate::scene::load::MAX_EXR_BLOCK_BYTES`]. A header that cannot be read is left to
+/// [`read_layers`], which reports it.
 fn check_env_samples(path: &Path) -> Result<()> {
     let Ok(Ok(meta)) = std::panic::catch_unwind(|| exr::meta::MetaData::read_from_file(path, false)) else {
         return Ok(());
@@ -202,7 +205,7 @@ fn check_env_samples(path: &Path) -> Result<()> {
             ),
         ));
     }
-    Ok(())
+    crate::scene::load::check_exr_blocks(path, &meta.headers)
 }
 
 /// An analytic environment (`[environment] preset = "..."`), radiance in linear RGB.

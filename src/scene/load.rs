@@ -113,6 +113,41 @@ pub(crate) fn check_size(path: &Path, width: usize, height: usize, max_dim: u32)
     Ok(())
 }
 
+/// Largest uncompressed block (tile or group of scan lines) of an EXR file that hfgi reads:
+/// 64 MiB, far above real files (a 256×256 tile or 32 lines of 16384 pixels of four f32 channels
+/// are 1 and 8 MiB).
+pub const MAX_EXR_BLOCK_BYTES: usize = 64 << 20;
+
+/// Rejects an EXR file any of whose parts (`headers`) has blocks of more than
+/// [`MAX_EXR_BLOCK_BYTES`]. The `exr` crate allocates and zeroes up to that size for each block
+/// before reading it, however few bytes the file holds: a 564-byte file with 83886144×64 tiles
+/// took 1.6 GB (found by fuzzing, docs/robustness.md "Fuzzing").
+pub(crate) fn check_exr_blocks(path: &Path, headers: &[exr::meta::header::Header]) -> Result<()> {
+    for header in headers {
+        let (pixels, what) = match header.blocks {
+            exr::meta::BlockDescription::Tiles(t) => {
+                let (tw, th) = (t.tile_size.width(), t.tile_size.height());
+                (tw.saturating_mul(th), format!("tiles of {tw}×{th} pixels"))
+            }
+            exr::meta::BlockDescription::ScanLines => {
+                let lines = header.compression.scan_lines_per_block();
+                (lines.saturating_mul(header.layer_size.width()), format!("blocks of {lines} scan line(s)"))
+            }
+        };
+        let bytes = pixels.saturating_mul(header.channels.bytes_per_pixel);
+        if bytes > MAX_EXR_BLOCK_BYTES {
+            return Err(Error::format(
+                path,
+                format!(
+                    "EXR {what} of {} byte(s) per pixel are {bytes} bytes each; at most {MAX_EXR_BLOCK_BYTES} are read",
+                    header.channels.bytes_per_pixel
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Validates the scaled samples into a [`HeightField`] named after `path`.
 pub(crate) fn finish(
     path: &Path,
@@ -212,6 +247,7 @@ fn load_exr(path: &Path, opts: &LoadOptions) -> Result<HeightField> {
         }
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
         check_size(path, w, h, opts.max_dim)?;
+        check_exr_blocks(path, &meta.headers)?;
         if !matches!(channel.sample_type, SampleType::F16 | SampleType::F32) {
             return Err(Error::format(
                 path,
