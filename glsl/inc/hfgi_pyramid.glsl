@@ -34,6 +34,7 @@ const uint HFGI_FLAG_HORIZON_SAMPLES = 2u; // ω_max = largest sample, not eq. 1
 const uint HFGI_FLAG_TANGENT = 4u; // ω_min = the exact tangent elevation, not −asin(N·d)
 const uint HFGI_FLAG_ACCUMULATE = 8u; // add to the output (a later azimuth chunk of the same set)
 const uint HFGI_FLAG_MAX_BOUND = 16u; // the indirect scan skips what the max pyramid rules out
+const uint HFGI_FLAG_SWEEP = 32u; // visibility: ω_max from the line sweep's horizons, no scan
 
 // Value of table entry `plane` (level `l`, of a pyramid whose level 0 is `base`) at level-0
 // position p0. `raw`: the unfiltered level as a bilinear surface (gi.level0 = "bilinear"; only

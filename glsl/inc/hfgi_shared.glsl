@@ -26,7 +26,7 @@ struct hfgi_PyramidPush {
     uint out_height;
 };
 
-// Push constants of the visibility pass (one dispatch per light set). 48 bytes.
+// Push constants of the visibility pass (one dispatch per light set). 64 bytes.
 struct hfgi_VisibilityPush {
     uint sample_offset; // first azimuth sample of the set in the samples / A-matrix buffers
     uint sample_count;
@@ -40,6 +40,28 @@ struct hfgi_VisibilityPush {
     uint stack_mode;    // 1: stack, 0: true pyramid
     uint flags;         // HFGI_FLAG_* (hfgi_pyramid.glsl; docs/accuracy.md §4)
     uint scan_extent;   // near_steps | far_steps << 16: scan samples before t = 1 texel and past N
+    uint horizon_first; // HFGI_FLAG_SWEEP: the sample whose horizons start the horizons buffer
+    float sweep_near;   // HFGI_FLAG_SWEEP: texels of the near field marched along each receiver's ray
+    uint pad1;
+    uint pad2;
+};
+
+// Push constants of the line sweep (glsl/visibility/sweep.comp.glsl, gi.visibility = "sweep").
+// One dispatch covers azimuth samples [sample_offset, + sample_count) and, of each, the sweep
+// lines [line_first, + line_count). 48 bytes.
+struct hfgi_SweepPush {
+    uint sample_offset; // first azimuth sample (samples buffer); its horizons go to azimuth slot 0
+    uint sample_count;
+    uint line_first;    // first line of this dispatch (0 = the azimuth's first line)
+    uint line_count;    // lines per azimuth in this dispatch (invocations along x)
+    uint work_width;    // receiver grid
+    uint work_height;
+    uint stack_mode;
+    uint flags;         // HFGI_FLAG_* (level 0 raw or filtered)
+    float texel_size;
+    uint hull_capacity; // stack entries per line (2·max(W, H) + 4: every point a line pushes)
+    float reach;        // gi.sweep_near: the far field starts this many texels ahead
+    uint pad1;
 };
 
 // Push constants of the direct shading pass. 112 bytes.

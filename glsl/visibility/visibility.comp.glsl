@@ -4,7 +4,8 @@
 // exponentially growing steps (eq. 14–16), take ω_max as the maximum of the cubic B-spline
 // through the blocking angles at knots and mid-points (eq. 17), project the visible window to
 // NLP (eq. 10–11) and accumulate V += A_j v_j, where A_j folds the wedge matrices and the
-// z-rotations of eq. 20–21 (built in f64 on the host).
+// z-rotations of eq. 20–21 (built in f64 on the host). With HFGI_FLAG_SWEEP, ω_max comes from
+// the line sweep's horizons (binding 6, docs/direct.md §8) instead of the scan.
 #include "hfgi_shared.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
@@ -18,6 +19,7 @@ layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
 layout(std430, binding = 3) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ, lo, hi
 layout(std430, binding = 4) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE, row-major
 layout(std430, binding = 5) buffer Vis { float hfgi_vis[]; };                  // accumulated over azimuth chunks
+layout(std430, binding = 6) readonly buffer Horizons { float hfgi_horizons[]; }; // sweep: [sample][receiver][2]
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
@@ -62,21 +64,86 @@ float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
     return wmax;
 }
 
+// Largest F(t)/t of the piece F(t0 + τ) = aτ² + bτ + c, τ ∈ [0, t1 − t0] (at t0 = 0, c = 0 and
+// the limit is b). Twin: reference::sweep::piece_max.
+float hfgi_piece_max(float t0, float t1, float a, float b, float c) {
+    float len = t1 - t0;
+    float best = max(t0 > 0.0 ? c / t0 : b, ((a * len + b) * len + c) / t1);
+    float cp = (a * t0 - b) * t0 + c; // F/t = a·t + b' + c'/t: a maximum at √(c'/a) when a, c' < 0
+    if (a < 0.0 && cp < 0.0) {
+        float ts = sqrt(cp / a);
+        if (ts > t0 && ts < t1) {
+            float tau = ts - t0;
+            best = max(best, ((a * tau + b) * tau + c) / ts);
+        }
+    }
+    return best;
+}
+
+// The sweep's near field (docs/direct.md §8): sup F(t)/t for t ∈ (0, reach] along the receiver's
+// own ray, one quadratic per level-0 cell through the surface at the piece's start, middle and
+// end (exact on the bilinear surface). False where the ray leaves the field at once.
+// Twin: reference::sweep::near_slope.
+bool hfgi_near_slope(hfgi_Scan scan, vec2 d, float reach, out float best) {
+    best = -1e30;
+    vec2 p = scan.p, n = scan.n0;
+    float ex = d.x > 0.0 ? (n.x - 1.0 - p.x) / d.x : (d.x < 0.0 ? p.x / -d.x : 1e30);
+    float ey = d.y > 0.0 ? (n.y - 1.0 - p.y) / d.y : (d.y < 0.0 ? p.y / -d.y : 1e30);
+    float t_end = min(reach, min(ex, ey));
+    if (t_end <= 0.0) return false;
+    vec2 stp = vec2(abs(d.x) > 1e-6 ? 1.0 / abs(d.x) : 1e30, abs(d.y) > 1e-6 ? 1.0 / abs(d.y) : 1e30);
+    vec2 dist = vec2(d.x > 0.0 ? floor(p.x) + 1.0 - p.x : p.x - ceil(p.x) + 1.0,
+                     d.y > 0.0 ? floor(p.y) + 1.0 - p.y : p.y - ceil(p.y) + 1.0);
+    vec2 tn = dist * stp;
+    float base = hfgi_height_at(scan, 0u, p);
+    float ta = 0.0, fa = 0.0;
+    for (int guard = 0; guard < 4 * int(reach) + 8; ++guard) {
+        float tb = min(min(tn.x, tn.y), t_end);
+        if (tb > ta + 1e-6) {
+            float len = tb - ta;
+            float fm = hfgi_height_at(scan, 0u, p + (ta + 0.5 * len) * d) - base;
+            float fb = hfgi_height_at(scan, 0u, p + tb * d) - base;
+            float a = 2.0 * (fb - 2.0 * fm + fa) / (len * len);
+            float b = (fb - fa) / len - a * len;
+            best = max(best, hfgi_piece_max(ta, tb, a, b, fa));
+            fa = fb;
+            ta = tb;
+        }
+        if (tb >= t_end) break;
+        if (tn.x <= tb) tn.x += stp.x;
+        if (tn.y <= tb) tn.y += stp.y;
+    }
+    return true;
+}
+
 void main() {
     uvec2 r = gl_GlobalInvocationID.xy;
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
     hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
                                      pc.texel_size, pc.stack_mode != 0u, pc.wrap != 0u, pc.flags, pc.scan_extent,
                                      HFGI_NV);
-    for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+    bool sweep = (pc.flags & HFGI_FLAG_SWEEP) != 0u;
+    if (!sweep)
+        for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
     bool samples_max = (pc.flags & HFGI_FLAG_HORIZON_SAMPLES) != 0u;
+    uint receivers = pc.work_width * pc.work_height;
 
     float V[HFGI_N2];
     for (int k = 0; k < HFGI_N2; ++k) V[k] = 0.0;
 
     for (uint j = 0u; j < pc.sample_count; ++j) {
         vec4 smp = hfgi_samples[pc.sample_offset + j];
-        float wmax = hfgi_horizon(scan, smp.xy, samples_max);
+        float wmax;
+        if (sweep) {
+            // The two lines' weighted horizons (glsl/visibility/sweep.comp.glsl).
+            uint h = ((pc.sample_offset + j - pc.horizon_first) * receivers + r.y * pc.work_width + r.x) * 2u;
+            wmax = hfgi_horizons[h] + hfgi_horizons[h + 1u];
+            float near;
+            if (pc.sweep_near > 0.0 && hfgi_near_slope(scan, smp.xy, pc.sweep_near, near))
+                wmax = max(wmax, atan(near / pc.texel_size));
+        } else {
+            wmax = hfgi_horizon(scan, smp.xy, samples_max);
+        }
         // eq. 11 within the sample's elevation window (§6), in the NLP or legendre basis.
         float v[HFGI_NE];
         hfgi_elevation(max(wmax, smp.z), smp.w, v);

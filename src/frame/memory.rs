@@ -105,6 +105,9 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     e.buffers(heights.named(PyramidKind::HEIGHTS));
     let vis = VisibilityData::new(scene);
     e.buffers(visibility::buffer_sizes(vis.samples.len(), vis.fold.len(), vis.sets.len(), work, n2));
+    if let Some(plan) = visibility::sweep_plan(scene) {
+        e.buffers(plan.buffer_sizes());
+    }
     e.buffers(shade::upload_sizes(scene));
     e.buffer(shade::OUTPUT_BUFFER, shade::output_bytes(w, h));
     e.buffer(shade::INCIDENT_BUFFER, shade::incident_bytes(scene));

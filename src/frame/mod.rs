@@ -11,6 +11,7 @@ pub mod radiance;
 pub mod renderer;
 pub mod shade;
 pub mod shared;
+pub mod sweep;
 pub mod truth;
 pub mod view;
 pub mod visibility;

@@ -40,6 +40,8 @@ pub const FLAG_ACCUMULATE: u32 = 8;
 /// `HFGI_FLAG_MAX_BOUND`: the indirect scan skips the intervals and the far end that the max
 /// pyramid (stage `pyramid.max`) rules out.
 pub const FLAG_MAX_BOUND: u32 = 16;
+/// `HFGI_FLAG_SWEEP`: the visibility pass reads `ω_max` from the line sweep's horizons.
+pub const FLAG_SWEEP: u32 = 32;
 
 /// Loop iterations one invocation of the visibility pass may run per dispatch, counted as
 /// `ladder + n²·e` per azimuth (the scan, then the fold `A_j v_j`; `e` values per azimuth,
@@ -112,6 +114,31 @@ pub struct VisibilityPush {
     pub flags: u32,
     /// `near_steps | far_steps << 16` ([`scan_extent`]).
     pub scan_extent: u32,
+    /// With [`FLAG_SWEEP`]: the sample whose horizons start the horizons buffer.
+    pub horizon_first: u32,
+    /// With [`FLAG_SWEEP`]: `gi.sweep_near`, the texels marched along each receiver's own ray.
+    pub sweep_near: f32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+
+/// `hfgi_SweepPush`: push constants of the line sweep (`glsl/visibility/sweep.comp.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SweepPush {
+    pub sample_offset: u32,
+    pub sample_count: u32,
+    pub line_first: u32,
+    pub line_count: u32,
+    pub work_width: u32,
+    pub work_height: u32,
+    pub stack_mode: u32,
+    pub flags: u32,
+    pub texel_size: f32,
+    pub hull_capacity: u32,
+    /// `gi.sweep_near`: the far field starts this many texels ahead.
+    pub reach: f32,
+    pub pad1: u32,
 }
 
 /// `hfgi_ShadePush`: push constants of the direct shading pass.
@@ -191,6 +218,13 @@ const _: () = assert!(std::mem::offset_of!(IndirectPush, specular) == 48);
 const _: () = assert!(std::mem::offset_of!(IndirectPush, sample_offset) == 64);
 const _: () = assert!(std::mem::offset_of!(IndirectPush, probes) == 68);
 const _: () = assert!(std::mem::offset_of!(VisibilityPush, flags) == 40);
+const _: () = assert!(std::mem::offset_of!(VisibilityPush, horizon_first) == 48);
+const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 64);
+const _: () = assert!(std::mem::size_of::<SweepPush>() == 48);
+const _: () = assert!(std::mem::offset_of!(SweepPush, texel_size) == 32);
+const _: () = assert!(std::mem::offset_of!(SweepPush, hull_capacity) == 36);
+const _: () = assert!(std::mem::offset_of!(SweepPush, reach) == 40);
+const _: () = assert!(std::mem::offset_of!(VisibilityPush, sweep_near) == 52);
 const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
 
 /// `hfgi_ViewPush`: push constants of the view raster pass (vertex stage).
@@ -262,7 +296,6 @@ pub struct TruthPush {
 const _: () = assert!(std::mem::size_of::<TruthPush>() == 96);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
-const _: () = assert!(std::mem::size_of::<VisibilityPush>() == 48);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);

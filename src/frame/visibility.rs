@@ -10,11 +10,12 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
-use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, VISIBILITY_LOOP_BUDGET};
+use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, FLAG_SWEEP, VISIBILITY_LOOP_BUDGET};
+use super::sweep::{SweepPass, SweepPlan};
 use crate::error::Result;
 use crate::math::azimuth::{self, AzimuthSet};
 use crate::math::elevation;
-use crate::scene::model::{PyramidMode, Scene};
+use crate::scene::model::{PyramidMode, Scene, VisibilityMethod};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
@@ -77,9 +78,20 @@ impl VisibilityData {
     }
 }
 
+/// The line sweep's split for `scene` (`gi.visibility = "sweep"` with some light set), else None.
+pub(crate) fn sweep_plan(scene: &Scene) -> Option<SweepPlan> {
+    let sets = light_sets(scene);
+    let max_set = sets.iter().map(|(_, s)| s.phi.len()).max()?;
+    (scene.gi.visibility == VisibilityMethod::Sweep).then(|| {
+        let (w, h) = (scene.field.width(), scene.field.height());
+        SweepPlan::new((w, h), scene.gi.working_size(w, h), max_set)
+    })
+}
+
 /// The pass's buffers `(name, bytes)` in creation order, for `samples` azimuth samples, `fold`
 /// floats of folded matrices and `sets` light sets on a `work` grid with `n2` coefficients
-/// (one source for the pass and [`crate::frame::memory`]).
+/// (one source for the pass and [`crate::frame::memory`]); the sweep's follow with
+/// `gi.visibility = "sweep"` ([`SweepPlan::buffer_sizes`]).
 pub(crate) fn buffer_sizes(
     samples: usize,
     fold: usize,
@@ -105,8 +117,10 @@ pub struct VisibilityPass {
     sets: Vec<SetRange>,
     n: usize,
     push: VisibilityPush,
-    /// Loop iterations per azimuth (ladder + n²·e), for the azimuth chunks.
+    /// Loop iterations per azimuth (ladder + n²·e; n²·e with the sweep), for the azimuth chunks.
     loop_cost: u32,
+    /// `gi.visibility = "sweep"`: the line sweep feeding the horizons.
+    sweep: Option<SweepPass>,
 }
 
 impl VisibilityPass {
@@ -123,6 +137,8 @@ impl VisibilityPass {
         let sizes = buffer_sizes(samples.len(), fold.len(), sets.len(), (ww as usize, wh as usize), n2);
         let mut parts: Vec<Buffer> = Vec::new();
         let mut pipeline = None;
+        let mut sweep = None;
+        let max_set = sets.iter().map(|s| s.count as usize).max().unwrap_or(0);
         let made = (|| -> Result<vk::DescriptorSet> {
             for (name, size) in sizes {
                 parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
@@ -131,10 +147,13 @@ impl VisibilityPass {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
                 memory::upload_f32(ctx, &parts[1], 0, &fold)?;
             }
+            if scene.gi.visibility == VisibilityMethod::Sweep && max_set > 0 {
+                sweep = Some(SweepPass::new(ctx, pyramid, &parts[0], scene, max_set)?);
+            }
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::VISIBILITY_VISIBILITY_COMP,
-                &[DescriptorKind::StorageBuffer; 6],
+                &[DescriptorKind::StorageBuffer; 7],
                 std::mem::size_of::<VisibilityPush>() as u32,
                 &[
                     (0, n as u32),
@@ -153,6 +172,7 @@ impl VisibilityPass {
                     Bind::Buffer(&parts[0]),
                     Bind::Buffer(&parts[1]),
                     Bind::Buffer(&parts[2]),
+                    Bind::Buffer(sweep.as_ref().map_or(&parts[0], |s: &SweepPass| s.horizons())),
                 ],
             )
         })();
@@ -162,6 +182,9 @@ impl VisibilityPass {
                 parts.into_iter().for_each(|b| b.destroy(ctx));
                 if let Some(mut p) = pipeline {
                     p.destroy(ctx);
+                }
+                if let Some(s) = sweep {
+                    s.destroy(ctx);
                 }
                 return Err(e);
             }
@@ -177,7 +200,8 @@ impl VisibilityPass {
             level_bias: scene.gi.level_step * scene.gi.level_offset,
             texel_size: scene.texel_size as f32,
             stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
-            flags: super::shared::scan_flags(&scene.gi),
+            flags: super::shared::scan_flags(&scene.gi) | if sweep.is_some() { FLAG_SWEEP } else { 0 },
+            sweep_near: scene.gi.sweep_near as f32,
             scan_extent: super::shared::scan_extent(&scene.gi),
             ..Default::default()
         };
@@ -190,8 +214,12 @@ impl VisibilityPass {
             sets,
             n,
             push,
-            loop_cost: (crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
-                + n2 * elevation::gpu_size(scene.gi.elevation_basis, n)) as u32,
+            loop_cost: (if sweep.is_some() {
+                4 * scene.gi.sweep_near as usize + 8 // the near field's pieces (hfgi_near_slope's guard)
+            } else {
+                crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
+            } + n2 * elevation::gpu_size(scene.gi.elevation_basis, n)) as u32,
+            sweep,
         })
     }
 
@@ -215,21 +243,33 @@ impl VisibilityPass {
         }
         rec.scope(stage, |ctx, cmd| {
             for (i, s) in &chosen {
-                // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into V.
-                for (c, (first, count)) in
-                    azimuth_chunks(s.count, self.loop_cost, VISIBILITY_LOOP_BUDGET).iter().enumerate()
-                {
-                    if c > 0 {
-                        barrier::compute_to_compute(ctx, cmd);
+                // With the sweep, chunks of azimuths whose horizons fit its buffer; else one.
+                let sweep_chunk = self.sweep.as_ref().map_or(s.count, |w| w.plan().chunk);
+                for (h, (hfirst, hcount)) in azimuth_chunks(s.count, 1, sweep_chunk).into_iter().enumerate() {
+                    if let Some(w) = &self.sweep {
+                        if h > 0 {
+                            barrier::compute_to_compute(ctx, cmd); // the projection read the horizons
+                        }
+                        w.record(ctx, cmd, s.first + hfirst, hcount);
                     }
-                    let push = VisibilityPush {
-                        sample_offset: s.first + first,
-                        sample_count: *count,
-                        out_offset: *i as u32 * receivers * n2,
-                        flags: self.push.flags | if c > 0 { FLAG_ACCUMULATE } else { 0 },
-                        ..self.push
-                    };
-                    self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
+                    // Azimuth chunks against lavapipe's loop limit; later ones accumulate into V.
+                    for (c, (first, count)) in
+                        azimuth_chunks(hcount, self.loop_cost, VISIBILITY_LOOP_BUDGET).iter().enumerate()
+                    {
+                        let later = hfirst + first > 0;
+                        if c > 0 {
+                            barrier::compute_to_compute(ctx, cmd);
+                        }
+                        let push = VisibilityPush {
+                            sample_offset: s.first + hfirst + first,
+                            sample_count: *count,
+                            out_offset: *i as u32 * receivers * n2,
+                            flags: self.push.flags | if later { FLAG_ACCUMULATE } else { 0 },
+                            horizon_first: s.first + hfirst,
+                            ..self.push
+                        };
+                        self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), groups);
+                    }
                 }
             }
             barrier::compute_to_compute(ctx, cmd);
@@ -255,7 +295,7 @@ impl VisibilityPass {
     }
     /// Bytes of GPU memory held.
     pub fn memory_bytes(&self) -> u64 {
-        self.samples.size + self.fold.size + self.vis.size
+        self.samples.size + self.fold.size + self.vis.size + self.sweep.as_ref().map_or(0, SweepPass::memory_bytes)
     }
 
     pub fn destroy(mut self, ctx: &Context) {
@@ -263,5 +303,8 @@ impl VisibilityPass {
         self.samples.destroy(ctx);
         self.fold.destroy(ctx);
         self.vis.destroy(ctx);
+        if let Some(s) = self.sweep {
+            s.destroy(ctx);
+        }
     }
 }

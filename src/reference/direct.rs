@@ -14,7 +14,7 @@ use crate::frame::visibility::{light_sets, SetKind};
 use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
 use crate::math::Mat;
 use crate::math::{elevation, triple, zh};
-use crate::scene::model::{Albedo, ElevationBasis, GiSettings, Horizon, Level0, PyramidMode, Scene};
+use crate::scene::model::{Albedo, ElevationBasis, GiSettings, Horizon, Level0, PyramidMode, Scene, VisibilityMethod};
 
 /// Tolerance (texels) of the domain test of docs/direct.md §2.
 pub const EDGE_TOL: f64 = 1e-3;
@@ -89,6 +89,11 @@ impl<'a> Scan<'a> {
     /// distance `t` texels (a radial probe).
     pub fn probe(&self, p: [f64; 2], q: [f64; 2], t: f64) -> f64 {
         ((self.height(0, q[0], q[1]) - self.height(0, p[0], p[1])) / (t * self.texel_size)).atan()
+    }
+
+    /// Level-0 height at `(x, y)` as the scan reads it (the sweep's profile, [`super::sweep`]).
+    pub fn height0(&self, x: f64, y: f64) -> f64 {
+        self.height(0, x, y)
     }
 
     /// Height at pyramid level `level`, level-0 position `(x, y)`, as the scan reads it.
@@ -207,6 +212,31 @@ pub fn visibility_at(scan: &Scan, n: usize, set: &AzimuthSet, mats: &[Mat], p: [
     accumulate_with(n, set, mats, &v)
 }
 
+/// `V` of one light set at every receiver of the `work` grid with the swept horizons
+/// ([`super::sweep`], `gi.visibility = "sweep"`, near reach `reach` texels). The azimuth directions are taken in f32, as the
+/// GPU reads them, so that both choose the same major axis at 45°.
+pub fn sweep_visibility(
+    scan: &Scan,
+    n: usize,
+    set: &AzimuthSet,
+    mats: &[Mat],
+    work: (usize, usize),
+    reach: f64,
+) -> Vec<Vec<f64>> {
+    let horizons: Vec<Vec<f64>> = set
+        .phi
+        .iter()
+        .map(|&phi| super::sweep::horizons(scan, work, phi.cos() as f32 as f64, phi.sin() as f32 as f64, reach))
+        .collect();
+    (0..work.0 * work.1)
+        .map(|r| {
+            let v: Vec<Vec<f64>> =
+                horizons.iter().map(|hz| elevation::interval(scan.basis, n, hz[r].max(set.lo), set.hi)).collect();
+            accumulate_with(n, set, mats, &v)
+        })
+        .collect()
+}
+
 /// Bilinear interpolation of per-receiver vectors at `(x, y)` in receiver-grid units (§6).
 pub fn interpolate(vis: &[Vec<f64>], work: (usize, usize), x: f64, y: f64, wrap: bool) -> Vec<f64> {
     let (fx, fy) = (x.floor(), y.floor());
@@ -300,6 +330,21 @@ impl Lobes {
 
 /// The whole direct pipeline of docs/direct.md on the CPU.
 pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
+    render_direct_with(scene, None)
+}
+
+/// A horizon oracle: `ω` for light set `set` (index into `light_sets`), azimuth `phi` and the
+/// receiver at level-0 position `p`.
+pub type HorizonFn<'a> = &'a dyn Fn(usize, f64, [f64; 2]) -> f64;
+
+/// [`render_direct`] with every horizon taken from `horizon` instead of the scan or the sweep
+/// (e.g. the exact horizons of [`super::ray`], to measure what the rest of the pipeline —
+/// azimuth sampling, elevation basis, SH products — leaves against the SH-visibility reference).
+pub fn render_direct_with_horizons(scene: &Scene, horizon: HorizonFn) -> Result<DirectOutput> {
+    render_direct_with(scene, Some(horizon))
+}
+
+fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<DirectOutput> {
     scene.gi.validate()?;
     let gi = &scene.gi;
     let n = gi.sh_order;
@@ -312,15 +357,29 @@ pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let sets = light_sets(scene);
 
-    // Visibility at every receiver of the working grid (§1–4).
+    // Visibility at every receiver of the working grid (§1–4), from the ladder or the sweep.
     let visibility: Vec<Vec<Vec<f64>>> = sets
         .iter()
-        .map(|(_, set)| {
+        .enumerate()
+        .map(|(si, (_, set))| {
             let mats = wedge_matrices(n, set, gi.interpolation, gi.elevation_basis);
+            if oracle.is_none() && gi.visibility == VisibilityMethod::Sweep {
+                return sweep_visibility(&scan, n, set, &mats, work, gi.sweep_near as f64);
+            }
             (0..work.0 * work.1)
                 .map(|r| {
                     let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
-                    visibility_at(&scan, n, set, &mats, p)
+                    match oracle {
+                        None => visibility_at(&scan, n, set, &mats, p),
+                        Some(hz) => {
+                            let v: Vec<Vec<f64>> = set
+                                .phi
+                                .iter()
+                                .map(|&phi| elevation::interval(scan.basis, n, hz(si, phi, p).max(set.lo), set.hi))
+                                .collect();
+                            accumulate_with(n, set, &mats, &v)
+                        }
+                    }
                 })
                 .collect()
         })

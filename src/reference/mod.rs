@@ -7,6 +7,7 @@ pub mod max;
 pub mod pyramid;
 pub mod ray;
 pub mod sh_eval;
+pub mod sweep;
 pub mod truth;
 pub mod water;
 pub mod work;

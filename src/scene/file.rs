@@ -39,7 +39,7 @@ use crate::scene::load::{load_heightfield_meta, LoadOptions};
 use crate::scene::model::limits;
 use crate::scene::model::{
     Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Quality,
-    Scene,
+    Scene, VisibilityMethod, SWEEP_NEEDS,
 };
 use crate::scene::HeightField;
 
@@ -197,6 +197,9 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let gi = ctx.gi(raw.gi.as_ref())?;
     let camera = ctx.camera(raw.camera.as_ref(), &field, texel_size)?;
     let animation = ctx.animation(raw.animation.as_ref(), wrap)?;
+    if wrap && gi.visibility == VisibilityMethod::Sweep {
+        return Err(ctx.invalid("gi.visibility", "\"sweep\"", SWEEP_NEEDS.to_string()));
+    }
     Ok(Scene { field, texel_size, wrap, material, environment, key_lights, gi, camera, animation })
 }
 
@@ -285,6 +288,8 @@ struct RawGi {
     scan_reach: Option<String>,
     omega_min: Option<String>,
     elevation_basis: Option<String>,
+    visibility: Option<String>,
+    sweep_near: Option<u32>,
 }
 
 #[derive(Deserialize, Default)]
@@ -968,6 +973,8 @@ impl Ctx<'_> {
             scan_reach: parse_opt(&raw.scan_reach).map_err(param)?.unwrap_or(d.scan_reach),
             omega_min: parse_opt(&raw.omega_min).map_err(param)?.unwrap_or(d.omega_min),
             elevation_basis: parse_opt(&raw.elevation_basis).map_err(param)?.unwrap_or(d.elevation_basis),
+            visibility: parse_opt(&raw.visibility).map_err(param)?.unwrap_or(d.visibility),
+            sweep_near: raw.sweep_near.unwrap_or(d.sweep_near),
         };
         gi.validate().map_err(param)?;
         Ok(gi)

@@ -192,6 +192,23 @@ settings_enum!(
     }
 );
 
+settings_enum!(
+    /// How environment and key-light visibility finds each receiver's horizon (`gi.visibility`,
+    /// docs/direct.md §8).
+    VisibilityMethod, "gi.visibility", "`ladder` or `sweep`", {
+        /// The paper's multi-resolution scan of the height pyramid (eq. 14–17).
+        Ladder = "ladder",
+        /// Line sweeps with a convex-hull stack (Timonen & Westerholm 2010): the horizon of the
+        /// level-0 surface along each sweep line, interpolated between the two lines beside a
+        /// receiver; non-periodic fields only. The indirect casting set keeps the ladder.
+        Sweep = "sweep",
+    }
+);
+
+/// What `gi.visibility = "sweep"` needs (the error when a scene combines it with a periodic field).
+pub const SWEEP_NEEDS: &str =
+    "\"ladder\" on a periodic field (heightfield.wrap = true): the sweep supports non-periodic fields only";
+
 /// Algorithm settings (`[gi]`). Defaults are the paper's (§9).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GiSettings {
@@ -240,6 +257,11 @@ pub struct GiSettings {
     pub omega_min: OmegaMin,
     /// Elevation basis of the per-azimuth vectors.
     pub elevation_basis: ElevationBasis,
+    /// Horizons of the environment and key-light visibility: the ladder scan or line sweeps.
+    pub visibility: VisibilityMethod,
+    /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
+    /// docs/direct.md §8), 0..=64; the sweep lines give the horizon beyond.
+    pub sweep_near: u32,
 }
 
 impl Default for GiSettings {
@@ -288,6 +310,8 @@ impl GiSettings {
             scan_reach: if paper { ScanReach::Side } else { ScanReach::Diagonal },
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
+            visibility: VisibilityMethod::Ladder,
+            sweep_near: 16,
         }
     }
 
@@ -300,6 +324,8 @@ impl GiSettings {
             pyramid: self.pyramid,
             glossy_pyramid: self.glossy_pyramid,
             amortize: self.amortize,
+            visibility: self.visibility,
+            sweep_near: self.sweep_near,
             ..GiSettings::preset(q)
         }
     }
@@ -310,7 +336,7 @@ impl GiSettings {
         format!(
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
-             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} key_light_azimuths={} bounces={}",
+             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} sweep_near={} key_light_azimuths={} bounces={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -329,6 +355,8 @@ impl GiSettings {
             self.scan_reach,
             self.omega_min,
             self.elevation_basis,
+            self.visibility,
+            self.sweep_near,
             self.key_light_azimuths,
             self.bounces
         )
@@ -553,6 +581,9 @@ impl Scene {
                 return Err(Error::param(name, format!("{v:?}"), format!("each coordinate within ±{c:e}")));
             }
         }
+        if self.wrap && self.gi.visibility == VisibilityMethod::Sweep {
+            return Err(Error::param("gi.visibility", "sweep", SWEEP_NEEDS));
+        }
         Ok(())
     }
 }
@@ -581,6 +612,7 @@ impl GiSettings {
         check("gi.near_steps", self.near_steps, 0, 64)?;
         check("gi.radial_probes", self.radial_probes, 0, 16)?;
         check("gi.radial_probes_later", self.radial_probes_later, 0, 16)?;
+        check("gi.sweep_near", self.sweep_near, 0, 64)?;
         Ok(())
     }
 
