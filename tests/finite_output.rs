@@ -25,6 +25,11 @@ const BASE: [&str; 5] = [
     "material.specular=[0.3,0.3,0.3]",
 ];
 
+/// Keys whose extremes are rendered with `gi.visibility = "sweep"` too (magnitudes the hull's
+/// slopes see, and the sweep's own knob).
+const SWEEP_TOO: [&str; 4] =
+    ["heightfield.texel_size", "heightfield.height_scale", "heightfield.height_offset", "gi.sweep_near"];
+
 /// Numeric keys not rendered at an extreme, and why (each is still range-checked).
 const NOT_RENDERED: [(&str, &str); 5] = [
     ("heightfield.nodata", "GeoTIFF files only: a fill value becomes a height, bounded like every height"),
@@ -87,6 +92,7 @@ fn cases(scale_max: f64) -> Vec<(&'static str, Vec<String>, Vec<String>)> {
         ("gi.near_steps", s(&["0", "64"]), s(&["65"])),
         ("gi.radial_probes", s(&["0", "16"]), s(&["17"])),
         ("gi.radial_probes_later", s(&["0", "16"]), s(&["17"])),
+        ("gi.sweep_near", s(&["0", "64"]), s(&["65"])),
     ]
 }
 
@@ -196,6 +202,12 @@ fn every_numeric_key_at_its_extremes_gives_finite_output() {
             let scene = scene_with(std::slice::from_ref(&set)).unwrap_or_else(|e| panic!("{set} rejected: {e}"));
             render_finite(&gpu, &scene, &set);
             rendered += 1;
+            if SWEEP_TOO.contains(&key) {
+                let both = [set.clone(), "gi.visibility=\"sweep\"".to_string()];
+                let scene = scene_with(&both).unwrap_or_else(|e| panic!("{both:?} rejected: {e}"));
+                render_finite(&gpu, &scene, &both.join(" "));
+                rendered += 1;
+            }
         }
         for b in &beyond {
             assert_rejected(key, &[format!("{key}={b}")]);

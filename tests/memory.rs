@@ -54,6 +54,9 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
         ("unlit", "key_light = []\n", with(&["gi.bounces=1"])),
         ("sh order 2", "", with(&["gi.sh_order=2", "gi.bounces=1"])),
         ("sh order 6", "", with(&["gi.sh_order=6", "gi.bounces=1", "heightfield.size=[20,31]"])),
+        ("sweep, 1 bounce", "", with(&["gi.visibility=\"sweep\"", "gi.bounces=1"])),
+        ("sweep, subsample 4", "", with(&["gi.visibility=\"sweep\"", "gi.subsample=4"])),
+        ("sweep, no environment", "[[key_light]]\n", with(&["gi.visibility=\"sweep\""])),
     ]
 }
 

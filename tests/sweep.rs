@@ -1,4 +1,4 @@
-//! `gi.visibility = "sweep"` (docs/direct.md §8): the swept horizons against the exact horizons
+//! `gi.visibility = "sweep"` (docs/direct.md §7): the swept horizons against the exact horizons
 //! of the bilinear surface (`reference::ray`, independent code: a DDA with a quadratic per cell
 //! and its own maximum), the GPU against its f64 twin, and the direct light against the
 //! SH-visibility reference next to the floor that exact horizons leave (the same CPU pipeline

@@ -1,5 +1,5 @@
 #version 460
-// The far field of the swept horizons (gi.visibility = "sweep"; docs/direct.md §8; Timonen &
+// The far field of the swept horizons (gi.visibility = "sweep"; docs/direct.md §7; Timonen &
 // Westerholm 2010). One invocation walks one sweep line of one azimuth from its far end to its
 // near end, keeping the upper convex hull of the surface points it crosses as a stack in
 // hfgi_hull (amortised O(1) per point); at every receiver column it queries the tangent from its

@@ -5,7 +5,7 @@
 // through the blocking angles at knots and mid-points (eq. 17), project the visible window to
 // NLP (eq. 10–11) and accumulate V += A_j v_j, where A_j folds the wedge matrices and the
 // z-rotations of eq. 20–21 (built in f64 on the host). With HFGI_FLAG_SWEEP, ω_max comes from
-// the line sweep's horizons (binding 6, docs/direct.md §8) instead of the scan.
+// the line sweep's horizons (binding 6, docs/direct.md §7) instead of the scan.
 #include "hfgi_shared.glsl"
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
@@ -80,7 +80,7 @@ float hfgi_piece_max(float t0, float t1, float a, float b, float c) {
     return best;
 }
 
-// The sweep's near field (docs/direct.md §8): sup F(t)/t for t ∈ (0, reach] along the receiver's
+// The sweep's near field (docs/direct.md §7): sup F(t)/t for t ∈ (0, reach] along the receiver's
 // own ray, one quadratic per level-0 cell through the surface at the piece's start, middle and
 // end (exact on the bilinear surface). False where the ray leaves the field at once.
 // Twin: reference::sweep::near_slope.

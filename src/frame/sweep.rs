@@ -1,4 +1,4 @@
-//! The line sweep of `gi.visibility = "sweep"` (docs/direct.md §8; Timonen & Westerholm 2010):
+//! The line sweep of `gi.visibility = "sweep"` (docs/direct.md §7; Timonen & Westerholm 2010):
 //! the horizon angle of every receiver along each azimuth sample, from the level-0 surface, for
 //! the visibility pass to project instead of scanning. Recorded inside the visibility stages
 //! (`visibility.environment`, `visibility.key_lights`), chunk by chunk of azimuths.
@@ -22,7 +22,7 @@ use crate::vk::{barrier, Buffer, ComputePipeline, Context};
 
 /// Bytes each of the sweep's two buffers may take: the azimuths per chunk and the lines per
 /// dispatch are chosen to stay within it.
-pub const SWEEP_BUDGET: u64 = 16 << 20;
+pub const SWEEP_BUDGET: u64 = 4 << 20;
 
 /// How the sweep of a `n0` field with a `work` receiver grid is split.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

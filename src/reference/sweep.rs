@@ -1,4 +1,4 @@
-//! CPU (f64) twin of the swept horizons (`gi.visibility = "sweep"`, docs/direct.md §8). The GPU
+//! CPU (f64) twin of the swept horizons (`gi.visibility = "sweep"`, docs/direct.md §7). The GPU
 //! version is `glsl/visibility/sweep.comp.glsl` (far field) and `hfgi_near_slope` in
 //! `glsl/visibility/visibility.comp.glsl` (near field); both follow this description.
 //!
@@ -31,9 +31,10 @@
 //! Why both: lines pass up to a texel beside a receiver, and the bilinear surface has a kink at
 //! every texel (where receivers sit): the two lines beside a receiver at the foot of a one-texel
 //! cliff see a ramp that its own ray does not, or the reverse. Without the near field
-//! (`R = 0`, Timonen's scheme alone) the direct error on one-texel terraces was 6.6× the floor of
-//! exact horizons; with `R = 16` it is within 10% of it (docs/direct.md §8 has the table). Beyond
-//! `R` a lateral offset of at most a texel changes the azimuth by at most `atan(1/R)`.
+//! (`R = 0`, Timonen's scheme alone) the direct error on one-texel terraces at 128² was 3.2× the
+//! ladder's; with `R = 16` it is 0.29× the ladder's and, at 64², within 10% of the floor that
+//! exact horizons leave (docs/direct.md §7, docs/performance.md §2). Beyond `R` a lateral offset
+//! of at most a texel changes the azimuth by at most `atan(1/R)`.
 //!
 //! Work per azimuth: O(W·H) hull operations and one O(log) query per receiver for the far field,
 //! ≤ 2R + 2 pieces per receiver for the near field (the ladder reads ~40 samples per receiver at

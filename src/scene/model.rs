@@ -194,7 +194,7 @@ settings_enum!(
 
 settings_enum!(
     /// How environment and key-light visibility finds each receiver's horizon (`gi.visibility`,
-    /// docs/direct.md §8).
+    /// docs/direct.md §7).
     VisibilityMethod, "gi.visibility", "`ladder` or `sweep`", {
         /// The paper's multi-resolution scan of the height pyramid (eq. 14–17).
         Ladder = "ladder",
@@ -260,7 +260,7 @@ pub struct GiSettings {
     /// Horizons of the environment and key-light visibility: the ladder scan or line sweeps.
     pub visibility: VisibilityMethod,
     /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
-    /// docs/direct.md §8), 0..=64; the sweep lines give the horizon beyond.
+    /// docs/direct.md §7), 0..=64; the sweep lines give the horizon beyond.
     pub sweep_near: u32,
 }
 

@@ -11,7 +11,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use hfgi::frame::Renderer;
 use hfgi::reference::truth::{TruthOutput, TruthSettings};
-use hfgi::scene::model::{GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene};
+use hfgi::scene::model::{GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene, VisibilityMethod};
 use hfgi::vk::{Context, Recorder, StageTimer};
 
 use super::{context, load_scene_or_default, plot, DeviceArgs};
@@ -94,8 +94,8 @@ struct Row {
 }
 
 /// The configurations: the baseline, then one knob at a time, the four presets, then (full
-/// sweep) the m × k grid.
-fn configs(base: &GiSettings, quick: bool) -> Vec<(String, GiSettings)> {
+/// sweep) the m × k grid; swept horizons (`gi.visibility = "sweep"`) unless the field wraps.
+fn configs(base: &GiSettings, quick: bool, base_wraps: bool) -> Vec<(String, GiSettings)> {
     let mut out = vec![("baseline".to_string(), base.clone())];
     let mut push = |knob: &str, f: &dyn Fn(&mut GiSettings)| {
         let mut g = base.clone();
@@ -136,6 +136,17 @@ fn configs(base: &GiSettings, quick: bool) -> Vec<(String, GiSettings)> {
     }
     for b in 0..=3 {
         push("bounces", &|g| g.bounces = b);
+    }
+    // Swept horizons (docs/direct.md §7), at the default near reach and along it.
+    if !base_wraps {
+        push("visibility", &|g| g.visibility = VisibilityMethod::Sweep);
+        let rs: &[u32] = if quick { &[0] } else { &[0, 4, 8, 32, 64] };
+        for &r in rs {
+            push("sweep_near", &|g| {
+                g.visibility = VisibilityMethod::Sweep;
+                g.sweep_near = r;
+            });
+        }
     }
     // The presets, marked on the Pareto plot (one group each).
     for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {
@@ -299,8 +310,12 @@ fn settings_label(g: &GiSettings) -> String {
     } else {
         String::new()
     };
+    let sweep = match g.visibility {
+        VisibilityMethod::Sweep => format!(" sweep near={}", g.sweep_near),
+        VisibilityMethod::Ladder => String::new(),
+    };
     format!(
-        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}",
+        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}",
         g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
 }
@@ -358,7 +373,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
         let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         let cfgs = match a.sweep {
-            Sweep::Knobs => configs(&scene.gi, a.quick),
+            Sweep::Knobs => configs(&scene.gi, a.quick, scene.wrap),
             Sweep::Ablation => ablation(&scene.gi, false),
             Sweep::Presets => ablation(&scene.gi, true),
         };

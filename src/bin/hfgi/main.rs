@@ -165,17 +165,66 @@ pub(crate) fn context(d: &DeviceArgs) -> Result<Context> {
     Context::headless_with(&opts).context(what)
 }
 
-fn print_timings(ctx: &Context, timer: &StageTimer) {
+/// Prints the stage times of one recording (it includes first-dispatch compilation on lazy
+/// drivers; `hfgi render` times a second frame instead).
+pub(crate) fn print_single_timings(ctx: &Context, timer: &StageTimer) {
     match timer.timings(ctx) {
         Ok(t) => {
             let lavapipe = ctx.info().kind == ash::vk::PhysicalDeviceType::CPU;
-            let label = if lavapipe { " (lavapipe: CPU time, not a GPU time)" } else { "" };
+            let label = if lavapipe {
+                " (lavapipe: CPU time, not a GPU time; first dispatch: includes compilation)"
+            } else {
+                ""
+            };
             for (stage, ms) in t {
                 eprintln!("  {stage:<24} {ms:9.3} ms{label}");
             }
         }
         Err(e) => eprintln!("  no stage timings: {e}"),
     }
+}
+
+/// Prints the warm frame's stage times, and beside them the first frame's excess: on drivers
+/// that compile a pipeline at its first dispatch (lavapipe), that is the compilation (with a
+/// cold Mesa shader cache, `MESA_SHADER_CACHE_DISABLE=true`, its full cost). Stages that repeat
+/// (one per bounce) are matched in order.
+fn print_timings(ctx: &Context, first: &StageTimer, warm: &StageTimer) {
+    let (f, w) = match (first.timings(ctx), warm.timings(ctx)) {
+        (Ok(f), Ok(w)) => (f, w),
+        (Err(e), _) | (_, Err(e)) => return eprintln!("  no stage timings: {e}"),
+    };
+    let lavapipe = ctx.info().kind == ash::vk::PhysicalDeviceType::CPU;
+    let clock = if lavapipe { "lavapipe: CPU time, not a GPU time" } else { "GPU time" };
+    eprintln!("  stage times of the second frame ({clock}); + the first frame's excess (first-dispatch compilation):");
+    let (mut total, mut extra) = (0.0, 0.0);
+    for (k, (stage, ms)) in w.iter().enumerate() {
+        let cold = f.get(k).filter(|(s, _)| s == stage).map_or(*ms, |(_, c)| *c);
+        eprintln!("  {stage:<24} {ms:9.3} ms   + {:9.3} ms", cold - ms);
+        total += ms;
+        extra += cold - ms;
+    }
+    eprintln!("  {:<24} {total:9.3} ms   + {extra:9.3} ms", "frame");
+}
+
+/// Records one frame of the renderer into one submit timed by `timer` and waits.
+fn record_timed(ctx: &Context, renderer: &mut Renderer, timer: &mut StageTimer) -> Result<()> {
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(ctx, cmd, Some(timer));
+        renderer.record(&mut rec);
+        Ok(())
+    })?;
+    Ok(())
+}
+
+/// Records the view pass into one submit timed by `timer` and waits.
+fn record_view(ctx: &Context, view: &ViewPass, timer: &mut StageTimer) -> Result<()> {
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(ctx, cmd, Some(timer));
+        // The view pass records its own compute → vertex/fragment barrier first.
+        view.record(&mut rec);
+        Ok(())
+    })?;
+    Ok(())
 }
 
 /// The scene file at `path` (or the default scene) with `--set` overrides applied.
@@ -235,20 +284,36 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let (vw, vh) = view.size();
     eprintln!("view: {vw}×{vh}, {}× MSAA, {:?}", view.samples(), view.color_format());
-    let mut timer = StageTimer::new(&ctx, 32 + 5 * scene.gi.bounces)?;
-    let run = ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(&ctx, cmd, Some(&mut timer));
-        renderer.record(&mut rec);
-        // The view pass records its own compute → vertex/fragment barrier first.
-        view.record(&mut rec);
+    // Two frames of the same passes (the second with the heights marked changed, so that
+    // amortisation does not halve it): the first pays each pipeline's first-dispatch compilation
+    // on drivers that compile lazily (lavapipe), the second is the frame's time.
+    // Two GI frames of the same passes (the second with the heights marked changed, so that
+    // amortisation does not halve it): the first pays each pipeline's first-dispatch compilation
+    // on drivers that compile lazily (lavapipe), the second is the frame's time. Then the view,
+    // in its own submit: after a draw, lavapipe's timestamps around compute work read near zero
+    // while the work still takes its time (docs/performance.md §3).
+    let capacity = 32 + 5 * scene.gi.bounces;
+    let mut timers: Vec<StageTimer> = Vec::new();
+    let made = (0..3).try_for_each(|k| -> Result<()> {
+        timers.push(StageTimer::new(&ctx, if k < 2 { capacity } else { 2 })?);
         Ok(())
     });
+    let run = made.and_then(|_| {
+        let [first, warm, raster] = &mut timers[..] else { unreachable!("three timers") };
+        record_timed(&ctx, &mut renderer, first)?;
+        renderer.mark_heights_changed();
+        record_timed(&ctx, &mut renderer, warm)?;
+        record_view(&ctx, &view, raster)
+    });
     let read = run.and_then(|_| Ok((renderer.read_layers(&ctx)?, view.read_hdr(&ctx)?)));
-    print_timings(&ctx, &timer);
+    if let [first, warm, raster] = &timers[..] {
+        print_timings(&ctx, first, warm);
+        print_single_timings(&ctx, raster);
+    }
     eprintln!("  GPU memory: {:.2} MiB", (renderer.memory_bytes() + view.memory_bytes()) as f64 / 1048576.0);
     view.destroy(&ctx);
     renderer.destroy(&ctx);
-    timer.destroy(&ctx);
+    timers.iter_mut().for_each(|t| t.destroy(&ctx));
     let (layers, image) = read?;
     ctx.check_validation()?;
     let (vw, vh) = (vw as usize, vh as usize);

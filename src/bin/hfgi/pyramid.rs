@@ -10,7 +10,7 @@ use hfgi::scene::load::{load_heightfield, LoadOptions};
 use hfgi::scene::HeightField;
 use hfgi::vk::{Recorder, StageTimer};
 
-use super::{context, print_timings, DeviceArgs};
+use super::{context, print_single_timings, DeviceArgs};
 
 #[derive(Args)]
 pub struct PyramidArgs {
@@ -91,7 +91,7 @@ pub fn pyramid(a: PyramidArgs) -> Result<()> {
         pyr.record(&mut rec);
         Ok(())
     })?;
-    print_timings(&ctx, &timer);
+    print_single_timings(&ctx, &timer);
     eprintln!("  pyramid memory: {:.2} MiB ({} levels)", pyr.memory_bytes() as f64 / 1048576.0, pyr.layout().count());
 
     // The four files together or none (docs/robustness.md).
