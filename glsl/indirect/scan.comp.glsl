@@ -1,4 +1,5 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // Indirect radiance vectors (NS09 §3, §5.2–5.3, §6; docs/indirect.md §2–3) at every receiver of
 // the working grid. Per azimuth φ_j: scan the height pyramid with the steps of eq. 14–16, keep
 // the casting set (eq. 6: samples whose blocking angle exceeds ω_min and every nearer sample),
@@ -250,7 +251,8 @@ void main() {
     vec3 N = normal_at(scan.p, wrap);
     bool tangent = (pc.flags & HFGI_FLAG_TANGENT) != 0u;
     float bmin = 3.402823466e38;
-    for (int l = 0; l < HFGI_NV; ++l) {
+    // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
+    [[dont_unroll]] for (int l = 0; l < HFGI_NV; ++l) {
         hfgi_base[l] = hfgi_scan_base(scan, uint(l));
         bmin = min(bmin, hfgi_base[l]);
     }

@@ -1,4 +1,5 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // Visibility of one light set (environment or a key light) at every receiver of the working
 // grid (NS09 §5.2 and §6; docs/direct.md §1–4). Per azimuth sample j: scan the pyramid with
 // exponentially growing steps (eq. 14–16), take ω_max as the maximum of the cubic B-spline
@@ -124,7 +125,8 @@ void main() {
                                      HFGI_NV);
     bool sweep = (pc.flags & HFGI_FLAG_SWEEP) != 0u;
     if (!sweep)
-        for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+        // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
+        [[dont_unroll]] for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
     bool samples_max = (pc.flags & HFGI_FLAG_HORIZON_SAMPLES) != 0u;
     uint receivers = pc.work_width * pc.work_height;
 

@@ -20,45 +20,54 @@ use super::{context, load_scene_or_default, plot, DeviceArgs};
 pub struct BenchArgs {
     /// Scene files (comma-separated). Default: the default scene, craters and city blocks.
     #[arg(long, value_delimiter = ',', default_value = "scenes/default.toml,scenes/craters.toml,scenes/city.toml")]
-    scenes: Vec<PathBuf>,
+    pub(crate) scenes: Vec<PathBuf>,
     /// Field size (texels per side) the scenes are rendered at (heightfield.size); 0 keeps each
     /// scene's own size (e.g. the non-square scenes/hard/steep.toml). Default 128 (64 with --quick).
     #[arg(long)]
-    size: Option<u32>,
+    pub(crate) size: Option<u32>,
     /// What to sweep: `knobs` (one knob at a time around the scene's settings plus the m × k grid
     /// of figure 10), `ablation` (the paper's settings, each accuracy fix of docs/accuracy.md §4
     /// alone, all of them) or `presets` (gi.quality draft → ultra, and the paper).
     #[arg(long, default_value = "knobs")]
-    sweep: Sweep,
+    pub(crate) sweep: Sweep,
     /// Override a setting of every scene, e.g. `--set gi.sh_order=4`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
-    overrides: Vec<String>,
+    pub(crate) overrides: Vec<String>,
     /// Keep only these knobs of the sweep (comma-separated names of the `knob` column, e.g.
     /// `level_offset,azimuths`); the baseline is always kept.
     #[arg(long, value_delimiter = ',')]
-    only: Vec<String>,
+    pub(crate) only: Vec<String>,
     /// Timed frames per configuration (after one warm-up frame); the median is reported.
     #[arg(long, default_value_t = 5)]
-    frames: u32,
+    pub(crate) frames: u32,
     /// Bounces of the baseline configuration (the sweep over bounces covers 0..=3).
     #[arg(long, default_value_t = 1)]
-    bounces: u32,
+    pub(crate) bounces: u32,
     /// Remove the scenes' key lights (environment light only): the references see a key light
     /// as its order-n SH projection, the pipeline as its window (docs/direct.md §5), so key
     /// lights add a convention difference to the error.
     #[arg(long)]
-    no_key_lights: bool,
+    pub(crate) no_key_lights: bool,
     /// A small sweep (for tests and quick looks): fewer values per knob, no grid.
     #[arg(long)]
-    quick: bool,
+    pub(crate) quick: bool,
     /// Azimuths of the ground truth (CONVENTIONS.md: at least 256).
     #[arg(long, default_value_t = 256)]
-    reference_azimuths: u32,
+    pub(crate) reference_azimuths: u32,
     /// Output folder: results.csv, results.md, pareto-<scene>.png.
     #[arg(long, default_value = "out/bench")]
-    out: PathBuf,
+    pub(crate) out: PathBuf,
+    /// Timing only (no references, any device): the median frame per stage, fps and memory over
+    /// table 1's grid (256², 512², 1024², or `--size`; sub-sampling 4×, 2×, 1×; 1–3 bounces)
+    /// on the first of `--scenes` (default: the default scene), cheapest first, until `--budget`
+    /// seconds are spent. Writes timing.csv and timing.md.
+    #[arg(long)]
+    pub(crate) timing: bool,
+    /// With `--timing`: seconds after which no further configuration is started.
+    #[arg(long, default_value_t = 600)]
+    pub(crate) budget: u64,
     #[command(flatten)]
-    device: DeviceArgs,
+    pub(crate) device: DeviceArgs,
 }
 
 impl BenchArgs {
@@ -250,11 +259,11 @@ fn truth_layers(t: &TruthOutput, bounces: u32) -> [Vec<[f64; 3]>; 3] {
 }
 
 /// Median milliseconds per stage, GPU memory in bytes, and the last frame's layers.
-type Measurement = (Vec<(String, f64)>, u64, hfgi::frame::ShadingLayers);
+pub(crate) type Measurement = (Vec<(String, f64)>, u64, hfgi::frame::ShadingLayers);
 
 /// Renders `scene` `1 + frames` times (every stage each frame) and returns the median time per
 /// stage (summed over a stage's repeats within a frame), the memory and the layers.
-fn measure(ctx: &Context, scene: &Scene, frames: u32) -> Result<Measurement> {
+pub(crate) fn measure(ctx: &Context, scene: &Scene, frames: u32) -> Result<Measurement> {
     let mut r = Renderer::new(ctx, scene)?;
     let stages = 8 + 5 * scene.gi.bounces;
     let mut timer = match StageTimer::new(ctx, stages) {
@@ -342,6 +351,9 @@ fn check_bench_outputs(a: &BenchArgs) -> Result<()> {
 pub fn bench(a: BenchArgs) -> Result<()> {
     if !(1..=MAX_BENCH_FRAMES).contains(&a.frames) {
         bail!("--frames {}: expected 1..={MAX_BENCH_FRAMES} timed frames per configuration", a.frames);
+    }
+    if a.timing {
+        return super::timing::run(&a, a.budget);
     }
     check_bench_outputs(&a)?;
     let ctx = context(&a.device)?;

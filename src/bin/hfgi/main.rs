@@ -6,6 +6,7 @@ mod export;
 mod plot;
 mod pyramid;
 mod reference;
+mod timing;
 
 use std::path::{Path, PathBuf};
 
@@ -504,7 +505,7 @@ fn spirv(out: &Path) -> Result<()> {
 
 /// Writes `text` to standard output and flushes it: a failing write (a full disk, a closed
 /// pipe) is an error and a non-zero exit, not ignored (docs/robustness.md, "Messages").
-fn write_stdout(text: &str) -> Result<()> {
+pub(crate) fn write_stdout(text: &str) -> Result<()> {
     use std::io::Write as _;
     let mut out = std::io::stdout().lock();
     out.write_all(text.as_bytes()).and_then(|()| out.flush()).context("writing to standard output")
