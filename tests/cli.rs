@@ -236,3 +236,25 @@ fn outputs_that_cannot_work_are_rejected_before_any_work() {
     left.sort();
     assert_eq!(left, ["h.f32", "scene.toml"], "nothing else is left in the folder");
 }
+
+/// `hfgi bench --timing`: every configuration of the grid at a tiny size, no references; the
+/// CSV has one row per configuration with a positive frame time and the device, the Markdown
+/// says how the times were taken.
+#[test]
+fn bench_timing_runs_the_grid_without_references() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let (ok, text) = hfgi(&["bench", "--timing", "--size", "16", "--frames", "1", "--out", out]);
+    assert!(ok, "{text}");
+    assert!(!text.contains("reference"), "--timing computed references: {text}");
+    let csv = std::fs::read_to_string(dir.path().join("timing.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 9, "3 sub-samplings × 3 bounces:\n{csv}");
+    for (row, (sub, b)) in rows.iter().zip([4, 2, 1].iter().flat_map(|s| (1..=3).map(move |b| (*s, b)))) {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!((f[0], f[1], f[2]), ("16", &*sub.to_string(), &*b.to_string()), "{row}");
+        assert!(f[3].parse::<f64>().unwrap() > 0.0, "{row}");
+    }
+    let md = std::fs::read_to_string(dir.path().join("timing.md")).unwrap();
+    assert!(md.contains("median of 1 frames after 1 warm-up") && md.contains("Device:"), "{md}");
+}
