@@ -80,7 +80,7 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
         info.driver,
         a.frames,
         scene_path.map_or("the default scene".into(), |p| p.display().to_string()),
-        load_scene_or_default(scene_path, &a.overrides)?.gi.describe(),
+        per_row_knobs_removed(&load_scene_or_default(scene_path, &a.overrides)?.gi.describe()),
         start.elapsed().as_secs_f64()
     );
     let (csv, md) = (to_csv(&done, &info.name, &info.driver), to_md(&header, &done, &skipped));
@@ -92,6 +92,15 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
     super::write_stdout(&md)?;
     eprintln!("wrote {} and {}", csv_path.display(), md_path.display());
     Ok(())
+}
+
+/// The resolved knobs without `subsample=` and `bounces=`, which each row sets.
+fn per_row_knobs_removed(knobs: &str) -> String {
+    knobs
+        .split(' ')
+        .filter(|k| !k.starts_with("subsample=") && !k.starts_with("bounces="))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 fn to_csv(rows: &[Timed], device: &str, driver: &str) -> String {
