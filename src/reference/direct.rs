@@ -201,20 +201,31 @@ pub fn bspline_max(omega: &[f64]) -> f64 {
 /// `V` of one light set at level-0 position `p` (§3–4); `mats` from
 /// [`crate::math::azimuth::wedge_matrices`].
 pub fn visibility_at(scan: &Scan, n: usize, set: &AzimuthSet, mats: &[Mat], p: [f64; 2]) -> Vec<f64> {
+    visibility_from(scan, n, set, mats, |_, phi| scan.omega_max(p, phi))
+}
+
+/// `V` of one light set from the horizon `omega(k, φ_k)` of each of its azimuths: the visible
+/// window `[max(ω, lo), hi]` in the elevation basis (§3), accumulated over the wedges (§4).
+fn visibility_from(
+    scan: &Scan,
+    n: usize,
+    set: &AzimuthSet,
+    mats: &[Mat],
+    omega: impl Fn(usize, f64) -> f64,
+) -> Vec<f64> {
     let v: Vec<Vec<f64>> = set
         .phi
         .iter()
-        .map(|&phi| {
-            let wmax = scan.omega_max(p, phi);
-            elevation::interval(scan.basis, n, wmax.max(set.lo), set.hi)
-        })
+        .enumerate()
+        .map(|(k, &phi)| elevation::interval(scan.basis, n, omega(k, phi).max(set.lo), set.hi))
         .collect();
     accumulate_with(n, set, mats, &v)
 }
 
 /// `V` of one light set at every receiver of the `work` grid with the swept horizons
-/// ([`super::sweep`], `gi.visibility = "sweep"`, near reach `reach` texels). The azimuth directions are taken in f32, as the
-/// GPU reads them, so that both choose the same major axis at 45°.
+/// ([`super::sweep`], `gi.visibility = "sweep"`, near reach `reach` texels). The azimuth
+/// directions are taken in f32, as the GPU reads them, so that both choose the same major axis
+/// at 45°.
 pub fn sweep_visibility(
     scan: &Scan,
     n: usize,
@@ -228,13 +239,7 @@ pub fn sweep_visibility(
         .iter()
         .map(|&phi| super::sweep::horizons(scan, work, phi.cos() as f32 as f64, phi.sin() as f32 as f64, reach))
         .collect();
-    (0..work.0 * work.1)
-        .map(|r| {
-            let v: Vec<Vec<f64>> =
-                horizons.iter().map(|hz| elevation::interval(scan.basis, n, hz[r].max(set.lo), set.hi)).collect();
-            accumulate_with(n, set, mats, &v)
-        })
-        .collect()
+    (0..work.0 * work.1).map(|r| visibility_from(scan, n, set, mats, |k, _| horizons[k][r])).collect()
 }
 
 /// Bilinear interpolation of per-receiver vectors at `(x, y)` in receiver-grid units (§6).
@@ -371,14 +376,7 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
                     let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
                     match oracle {
                         None => visibility_at(&scan, n, set, &mats, p),
-                        Some(hz) => {
-                            let v: Vec<Vec<f64>> = set
-                                .phi
-                                .iter()
-                                .map(|&phi| elevation::interval(scan.basis, n, hz(si, phi, p).max(set.lo), set.hi))
-                                .collect();
-                            accumulate_with(n, set, &mats, &v)
-                        }
+                        Some(hz) => visibility_from(&scan, n, set, &mats, |_, phi| hz(si, phi, p)),
                     }
                 })
                 .collect()

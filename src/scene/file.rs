@@ -39,7 +39,7 @@ use crate::scene::load::{load_heightfield_meta, LoadOptions};
 use crate::scene::model::limits;
 use crate::scene::model::{
     Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Quality,
-    Scene, VisibilityMethod, SWEEP_NEEDS,
+    Scene,
 };
 use crate::scene::HeightField;
 
@@ -197,9 +197,7 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let gi = ctx.gi(raw.gi.as_ref())?;
     let camera = ctx.camera(raw.camera.as_ref(), &field, texel_size)?;
     let animation = ctx.animation(raw.animation.as_ref(), wrap)?;
-    if wrap && gi.visibility == VisibilityMethod::Sweep {
-        return Err(ctx.invalid("gi.visibility", "\"sweep\"", SWEEP_NEEDS.to_string()));
-    }
+    crate::scene::model::check_sweep(wrap, &gi).map_err(|e| ctx.wrap("gi.visibility", e))?;
     Ok(Scene { field, texel_size, wrap, material, environment, key_lights, gi, camera, animation })
 }
 

@@ -198,16 +198,26 @@ settings_enum!(
     VisibilityMethod, "gi.visibility", "`ladder` or `sweep`", {
         /// The paper's multi-resolution scan of the height pyramid (eq. 14–17).
         Ladder = "ladder",
-        /// Line sweeps with a convex-hull stack (Timonen & Westerholm 2010): the horizon of the
-        /// level-0 surface along each sweep line, interpolated between the two lines beside a
-        /// receiver; non-periodic fields only. The indirect casting set keeps the ladder.
+        /// Swept horizons: the level-0 surface marched exactly along each receiver's own ray for
+        /// `sweep_near` texels, and beyond it line sweeps with a convex-hull stack (Timonen &
+        /// Westerholm 2010) interpolated between the two lines beside a receiver; non-periodic
+        /// fields only. The indirect casting set keeps the ladder.
         Sweep = "sweep",
     }
 );
 
-/// What `gi.visibility = "sweep"` needs (the error when a scene combines it with a periodic field).
-pub const SWEEP_NEEDS: &str =
-    "\"ladder\" on a periodic field (heightfield.wrap = true): the sweep supports non-periodic fields only";
+/// `gi.visibility = "sweep"` needs a non-periodic field: the error when `wrap` and `gi` combine
+/// them (the scene parser and [`Scene::check_limits`] both ask here).
+pub fn check_sweep(wrap: bool, gi: &GiSettings) -> Result<()> {
+    if wrap && gi.visibility == VisibilityMethod::Sweep {
+        return Err(Error::param(
+            "gi.visibility",
+            "sweep",
+            "\"ladder\" on a periodic field (heightfield.wrap = true): the sweep supports non-periodic fields only",
+        ));
+    }
+    Ok(())
+}
 
 /// Algorithm settings (`[gi]`). Defaults are the paper's (§9).
 #[derive(Clone, Debug, PartialEq)]
@@ -581,10 +591,7 @@ impl Scene {
                 return Err(Error::param(name, format!("{v:?}"), format!("each coordinate within ±{c:e}")));
             }
         }
-        if self.wrap && self.gi.visibility == VisibilityMethod::Sweep {
-            return Err(Error::param("gi.visibility", "sweep", SWEEP_NEEDS));
-        }
-        Ok(())
+        check_sweep(self.wrap, &self.gi)
     }
 }
 

@@ -207,22 +207,10 @@ fn print_timings(ctx: &Context, first: &StageTimer, warm: &StageTimer) {
     eprintln!("  {:<24} {total:9.3} ms   + {extra:9.3} ms", "frame");
 }
 
-/// Records one frame of the renderer into one submit timed by `timer` and waits.
-fn record_timed(ctx: &Context, renderer: &mut Renderer, timer: &mut StageTimer) -> Result<()> {
+/// Records what `record` records into one submit timed by `timer`, and waits.
+fn record_timed(ctx: &Context, timer: &mut StageTimer, record: impl FnOnce(&mut Recorder)) -> Result<()> {
     ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(ctx, cmd, Some(timer));
-        renderer.record(&mut rec);
-        Ok(())
-    })?;
-    Ok(())
-}
-
-/// Records the view pass into one submit timed by `timer` and waits.
-fn record_view(ctx: &Context, view: &ViewPass, timer: &mut StageTimer) -> Result<()> {
-    ctx.submit_and_wait(|cmd| {
-        let mut rec = Recorder::new(ctx, cmd, Some(timer));
-        // The view pass records its own compute → vertex/fragment barrier first.
-        view.record(&mut rec);
+        record(&mut Recorder::new(ctx, cmd, Some(timer)));
         Ok(())
     })?;
     Ok(())
@@ -285,9 +273,6 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let (vw, vh) = view.size();
     eprintln!("view: {vw}×{vh}, {}× MSAA, {:?}", view.samples(), view.color_format());
-    // Two frames of the same passes (the second with the heights marked changed, so that
-    // amortisation does not halve it): the first pays each pipeline's first-dispatch compilation
-    // on drivers that compile lazily (lavapipe), the second is the frame's time.
     // Two GI frames of the same passes (the second with the heights marked changed, so that
     // amortisation does not halve it): the first pays each pipeline's first-dispatch compilation
     // on drivers that compile lazily (lavapipe), the second is the frame's time. Then the view,
@@ -301,10 +286,11 @@ fn render(a: RenderArgs) -> Result<()> {
     });
     let run = made.and_then(|_| {
         let [first, warm, raster] = &mut timers[..] else { unreachable!("three timers") };
-        record_timed(&ctx, &mut renderer, first)?;
+        record_timed(&ctx, first, |rec| renderer.record(rec))?;
         renderer.mark_heights_changed();
-        record_timed(&ctx, &mut renderer, warm)?;
-        record_view(&ctx, &view, raster)
+        record_timed(&ctx, warm, |rec| renderer.record(rec))?;
+        // The view pass records its own compute → vertex/fragment barrier first.
+        record_timed(&ctx, raster, |rec| view.record(rec))
     });
     let read = run.and_then(|_| Ok((renderer.read_layers(&ctx)?, view.read_hdr(&ctx)?)));
     if let [first, warm, raster] = &timers[..] {

@@ -45,6 +45,8 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
     let (csv_path, md_path) = (a.out.join("timing.csv"), a.out.join("timing.md"));
     let scene_path = a.scenes.first().map(|p| p.as_path());
     super::check_outputs(&[&csv_path, &md_path], scene_path, &a.overrides)?;
+    // The scene as given, read before any work: the header's knobs.
+    let knobs = per_row_knobs_removed(&load_scene_or_default(scene_path, &a.overrides)?.gi.describe());
     let ctx = context(&a.device)?;
     let info = ctx.info().clone();
     let lavapipe = info.kind == ash::vk::PhysicalDeviceType::CPU;
@@ -80,7 +82,7 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
         info.driver,
         a.frames,
         scene_path.map_or("the default scene".into(), |p| p.display().to_string()),
-        per_row_knobs_removed(&load_scene_or_default(scene_path, &a.overrides)?.gi.describe()),
+        knobs,
         start.elapsed().as_secs_f64()
     );
     let (csv, md) = (to_csv(&done, &info.name, &info.driver), to_md(&header, &done, &skipped));
