@@ -1,6 +1,9 @@
 //! Compiles every shader in `glsl/` to SPIR-V (see tools/hfgi-glsl) and embeds it.
 fn main() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+    // The manifest directory at run time, not `env!` (baked in when the build script itself was
+    // compiled): a build script binary reused from another checkout sharing the target
+    // directory would otherwise compile that checkout's shaders.
+    let root = std::path::PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("CARGO_MANIFEST_DIR")).join("glsl");
     println!("cargo:rerun-if-changed={}", root.display());
     let out = std::path::PathBuf::from(std::env::var("OUT_DIR").expect("OUT_DIR")).join("shaders.rs");
     let shaders = match hfgi_glsl::compile_tree(&root) {

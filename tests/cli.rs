@@ -241,6 +241,46 @@ fn outputs_that_cannot_work_are_rejected_before_any_work() {
 /// CSV has one row per configuration with a positive frame time and the device, the Markdown
 /// says how the times were taken.
 #[test]
+fn bench_saves_exact_references_and_skips_sh_visibility() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let common = ["--set", "heightfield.size=16", "--set", "gi.bounces=1"];
+    let (ok, msg) = hfgi(
+        &[
+            &["bench", "--sweep", "presets", "--only", "quality=draft", "--scenes", "scenes/hard/terraces.toml"][..],
+            &["--size", "16", "--frames", "1", "--reference-azimuths", "32", "--save-references", "--no-sh-visibility"],
+            &["--out", out.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(ok, "{msg}");
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (ex, sv) = (
+        header.iter().position(|c| *c == "exact_total").unwrap(),
+        header.iter().position(|c| *c == "shvis_total").unwrap(),
+    );
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 2, "paper and draft:\n{csv}");
+    for r in &rows {
+        assert!(r[ex].parse::<f64>().unwrap() > 0.0, "{r:?}");
+        assert_eq!(r[sv], "NaN", "no SH-visibility reference: {r:?}");
+    }
+    // The saved reference is the one `hfgi reference` writes for the same settings.
+    let saved = std::fs::read(out.join("reference-terraces-n4.exr")).unwrap();
+    let cli = dir.path().join("cli.exr");
+    let (ok, msg) = hfgi(
+        &[
+            &["reference", "scenes/hard/terraces.toml", "--azimuths", "32", "--shading-exr", cli.to_str().unwrap()][..],
+            &common,
+        ]
+        .concat(),
+    );
+    assert!(ok, "{msg}");
+    assert!(saved == std::fs::read(&cli).unwrap(), "bench's saved reference differs from `hfgi reference`");
+}
+
+#[test]
 fn bench_timing_runs_the_grid_without_references() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();

@@ -81,12 +81,23 @@ _PROBE = ("import drjit as dr, mitsuba as mi; dr.set_thread_count(1); mi.set_var
           "x = dr.arange(mi.Float, 8); print(dr.maximum(x, 3.0).numpy().sum())")
 
 
+_INITIALISED = {}
+
+
 def init_mitsuba(threads, force_scalar=False):
-    """llvm_ad_rgb when a working libLLVM >= 16 is there, else scalar_rgb, said loudly.
+    """llvm_ad_rgb when a working libLLVM >= 16 is there, else scalar_rgb, said loudly; once per
+    process and (threads, force_scalar).
 
     LLVM 15 (Debian 12's default) aborts the whole process inside LLVM ("Cannot select:
     fmaximum") on the first dr.maximum, which no try/except catches, so the backend is probed in
     a child process first."""
+    key = (threads, force_scalar)
+    if key not in _INITIALISED:
+        _INITIALISED[key] = _init_mitsuba(threads, force_scalar)
+    return _INITIALISED[key]
+
+
+def _init_mitsuba(threads, force_scalar):
     import subprocess
 
     reason = None
@@ -392,6 +403,181 @@ class Tracer:
         return t
 
 
+class PeerRenderer:
+    """One exported field in Mitsuba: the mesh and receivers, built once (`setup_seconds`); then
+    the direct layer at given sample counts, and the indirect bounces from a direct layer.
+    tools/peer_ratio.py drives it in-process, so that repeated runs reuse the mesh and Dr.Jit's
+    compiled kernels."""
+
+    def __init__(self, export_dir, refine=4, threads=1, eps=None, no_local_test=False, scalar=False):
+        sc = load_export(export_dir)
+        if sc.get("wrap", False):
+            log("wrap = true is not supported by this check (periodic fields need an infinite tiling)")
+            sys.exit(2)
+        self.export_dir = export_dir
+        self.sc = sc
+        H, s = sc["H"], float(sc["texel_size"])
+        self.H, self.s = H, s
+        self.h, self.w = H.shape
+        self.rho = sc["albedo"]
+        self.env = sc["environment_sh"]
+        self.bounces = int(sc.get("bounces", 0))
+        self.keys = sc["key_light"]
+        self.no_local_test = no_local_test
+        dz = max(np.abs(np.diff(H, axis=0)).max(initial=0.0), np.abs(np.diff(H, axis=1)).max(initial=0.0))
+        extent = max((self.w - 1) * s, (self.h - 1) * s, np.abs(H).max())
+        self.eps = eps if eps is not None else max(1e-4 * max(s, dz), 64 * float(np.spacing(np.float32(extent))))
+        self.dr, self.mi, self.variant = init_mitsuba(threads, scalar)
+        t0 = time.time()
+        self.scene = build_mesh(self.mi, H, s, refine)
+        self.tracer = Tracer(self.mi, self.scene, self.variant)
+        self.N = normals(H, s).reshape(-1, 3)
+        self.T, self.B = onb(self.N)
+        jj, ii = np.meshgrid(np.arange(self.h), np.arange(self.w), indexing="ij")
+        P = np.stack([ii.ravel() * s, jj.ravel() * s, H.ravel()], 1)
+        self.O = P + np.array([0.0, 0.0, self.eps])
+        self.ntex = self.w * self.h
+        self.Hf = H.ravel()
+        self.setup_seconds = time.time() - t0
+
+    def enters_below(self, tex, d):
+        """True where the ray from receiver `tex` along d goes into the bilinear surface at
+        t = 0+: its slope d_z is below the surface's one-sided directional derivative into the
+        quad it enters, (H[j][i±1]-H[j][i])|d_x|/s + (H[j±1][i]-H[j][i])|d_y|/s (the bilinear
+        uv term has no first-order part at a corner). A ray that leaves the domain at once
+        never does."""
+        if self.no_local_test:
+            return np.zeros(len(d), dtype=bool)
+        w, h, Hf = self.w, self.h, self.Hf
+        i, j = tex % w, tex // w
+        i1 = np.where(d[:, 0] >= 0, i + 1, i - 1)
+        j1 = np.where(d[:, 1] >= 0, j + 1, j - 1)
+        inside = (i1 >= 0) & (i1 < w) & (j1 >= 0) & (j1 < h)
+        i1c, j1c = np.clip(i1, 0, w - 1), np.clip(j1, 0, h - 1)
+        h0 = Hf[tex]
+        slope = ((Hf[j * w + i1c] - h0) * np.abs(d[:, 0]) + (Hf[j1c * w + i] - h0) * np.abs(d[:, 1])) / self.s
+        return inside & (d[:, 2] < slope)
+
+    def passes(self, label, pass_id, per_texel, fn, seed, chunk, quiet=False):
+        """Run fn(texel_slice, key) over chunks of texels; fn returns a (len, 3) array."""
+        out = np.zeros((self.ntex, 3))
+        tpc = max(1, chunk // per_texel)
+        nch = (self.ntex + tpc - 1) // tpc
+        t0 = time.time()
+        for c in range(nch):
+            sl = slice(c * tpc, min(self.ntex, (c + 1) * tpc))
+            key = (seed * 1000003 + pass_id) & ((1 << 63) - 1)
+            out[sl] = fn(sl, key)
+            if not quiet and (c == nch - 1 or (c % max(1, nch // 10)) == 0):
+                log(f"{label}: chunk {c + 1}/{nch}, {time.time() - t0:.1f} s")
+        return out
+
+    def direct(self, spp, key_spp=None, seed=0, chunk=1 << 20, quiet=False):
+        """The direct layer L_o = rho/pi E, (ntex, 3): the environment over m x m stratified
+        cosine directions (m = round(sqrt(spp))), each key light over mk x mk directions uniform
+        in its cap."""
+        m = max(1, int(round(math.sqrt(spp))))
+        mk = max(1, int(round(math.sqrt(key_spp if key_spp else spp))))
+        nspp, kspp = m * m, mk * mk
+        N, T, B, O = self.N, self.T, self.B, self.O
+
+        def env_chunk(sl, key):
+            nt = sl.stop - sl.start
+            loc = cosine_local(stratified(key, np.arange(sl.start, sl.stop), m))
+            rep = lambda a: np.repeat(a[sl], nspp, axis=0)  # noqa: E731
+            d = to_world(loc, rep(N), rep(T), rep(B))
+            tex = np.repeat(np.arange(sl.start, sl.stop), nspp)
+            vis = ~self.enters_below(tex, d)
+            vis[vis] = self.tracer.escapes(rep(O)[vis], d[vis])
+            L = sh_eval_rgb(self.env, d) * vis[:, None]
+            return math.pi * L.reshape(nt, nspp, 3).mean(1)
+
+        E = self.passes("direct/environment", 0, nspp, env_chunk, seed, chunk, quiet)
+        for kidx, kl in enumerate(self.keys):
+            E += self.passes(f"direct/key light {kidx}", 100 + kidx, kspp, self._key_chunk(kl, mk), seed, chunk, quiet)
+        return self.rho[None, :] / math.pi * E
+
+    def _key_chunk(self, kl, mk):
+        """The chunk function of one key light (a true cap of directions), mk x mk samples."""
+        kd = np.asarray(kl["direction"], dtype=np.float64)
+        kd /= np.linalg.norm(kd)
+        Lk = np.asarray(kl["radiance"], dtype=np.float64)
+        ca = math.cos(float(kl["angular_radius"]))
+        omega = 2 * math.pi * (1 - ca)
+        kt, kb = onb(kd[None, :])
+        kspp = mk * mk
+
+        def key_chunk(sl, key):
+            nt = sl.stop - sl.start
+            loc = cap_local(stratified(key, np.arange(sl.start, sl.stop), mk), ca)
+            d = to_world(loc, kd[None, :], kt, kb)
+            Nr = np.repeat(self.N[sl], kspp, axis=0)
+            cos = np.einsum("ij,ij->i", Nr, d)
+            up = cos > 0
+            up &= ~self.enters_below(np.repeat(np.arange(sl.start, sl.stop), kspp), d)
+            vis = np.zeros(len(d), dtype=bool)
+            if up.any():
+                vis[up] = self.tracer.escapes(np.repeat(self.O[sl], kspp, axis=0)[up], d[up])
+            wgt = np.where(vis, cos, 0.0)
+            return omega * wgt.reshape(nt, kspp).mean(1)[:, None] * Lk[None, :]
+
+        return key_chunk
+
+    def indirect(self, direct, bounce_spp, bounces=None, seed=0, chunk=1 << 20, quiet=False):
+        """The indirect layer (sum of bounces 1..bounces, default the export's), fresh
+        mb x mb cosine directions per bounce, from the direct layer `direct`."""
+        mb = max(1, int(round(math.sqrt(bounce_spp))))
+        bspp = mb * mb
+        s, rho = self.s, self.rho
+        grid = direct.reshape(self.h, self.w, 3)
+        indirect = np.zeros_like(direct)
+        for b in range(1, (self.bounces if bounces is None else bounces) + 1):
+            prev = grid
+
+            def ind_chunk(sl, key, prev=prev):
+                nt = sl.stop - sl.start
+                loc = cosine_local(stratified(key, np.arange(sl.start, sl.stop), mb))
+                rep = lambda a: np.repeat(a[sl], bspp, axis=0)  # noqa: E731
+                d = to_world(loc, rep(self.N), rep(self.T), rep(self.B))
+                o = rep(self.O)
+                tex = np.repeat(np.arange(sl.start, sl.stop), bspp)
+                below = self.enters_below(tex, d)
+                t = np.full(len(d), np.inf)
+                t[~below] = self.tracer.hit_t(o[~below], d[~below])
+                hit = np.isfinite(t)
+                Lin = np.zeros((len(d), 3))
+                # Into the surface at t = 0+: the first hit is the receiver itself.
+                Lin[below] = prev.reshape(-1, 3)[tex[below]]
+                if hit.any():
+                    p = o[hit] + t[hit, None] * d[hit]
+                    Lin[hit] = bilinear(prev, p[:, 0] / s, p[:, 1] / s)
+                return rho[None, :] * Lin.reshape(nt, bspp, 3).mean(1)
+
+            Lb = self.passes(f"indirect/bounce {b}", 200 + b, bspp, ind_chunk, seed, chunk, quiet)
+            indirect += Lb
+            grid = Lb.reshape(self.h, self.w, 3)
+        return indirect
+
+    def write(self, path, direct, indirect):
+        """The layers as `hfgi render --shading-exr` names them (glossy = 0)."""
+        h, w = self.h, self.w
+        total = direct + indirect
+        img = np.concatenate([total, direct, np.zeros_like(direct), indirect], axis=1).reshape(h, w, 12)
+        names = ["R", "G", "B", "direct.R", "direct.G", "direct.B", "glossy.R", "glossy.G", "glossy.B",
+                 "indirect.R", "indirect.G", "indirect.B"]
+        bmp = self.mi.Bitmap(np.ascontiguousarray(img.astype(np.float32)),
+                             pixel_format=self.mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        # Mitsuba 3.9.1's EXR writer deadlocks on a one-thread Dr.Jit pool (it waits on a task
+        # that it queued behind itself): give it a second thread for the write.
+        threads = self.dr.thread_count()
+        if threads < 2:
+            self.dr.set_thread_count(2)
+        bmp.write(path)
+        if threads < 2:
+            self.dr.set_thread_count(threads)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("export_dir", nargs="?")
@@ -419,158 +605,19 @@ def main():
         ap.error("EXPORT_DIR and --out are required")
     self_test()
 
-    sc = load_export(args.export_dir)
-    if sc.get("wrap", False):
-        log("wrap = true is not supported by this check (periodic fields need an infinite tiling)")
-        sys.exit(2)
-    H, s = sc["H"], float(sc["texel_size"])
-    h, w = H.shape
-    rho = sc["albedo"]
-    env = sc["environment_sh"]
-    bounces = int(sc.get("bounces", 0))
-    keys = sc["key_light"]
-    m = max(1, int(round(math.sqrt(args.spp))))
-    spp = m * m
-    mk = max(1, int(round(math.sqrt(args.key_spp if args.key_spp else args.spp))))
-    kspp = mk * mk
-    mb = max(1, int(round(math.sqrt(args.bounce_spp if args.bounce_spp else args.spp))))
-    bspp = mb * mb
-
-    dz = max(np.abs(np.diff(H, axis=0)).max(initial=0.0), np.abs(np.diff(H, axis=1)).max(initial=0.0))
-    extent = max((w - 1) * s, (h - 1) * s, np.abs(H).max())
-    eps = args.eps if args.eps is not None else max(1e-4 * max(s, dz), 64 * float(np.spacing(np.float32(extent))))
-    log(f"{args.export_dir}: {w}x{h}, s={s}, bounces={bounces}, {len(keys)} key light(s), SH order "
-        f"{int(round(math.sqrt(env.shape[0])))}, spp={spp} ({m}x{m} stratified), key spp={kspp}, bounce spp={bspp}, eps={eps:.3g}, seed={args.seed}")
-
-    dr, mi, variant = init_mitsuba(args.threads, args.scalar)
-    scene = build_mesh(mi, H, s, args.refine)
-    tracer = Tracer(mi, scene, variant)
-
-    N = normals(H, s).reshape(-1, 3)
-    T, B = onb(N)
-    jj, ii = np.meshgrid(np.arange(h), np.arange(w), indexing="ij")
-    P = np.stack([ii.ravel() * s, jj.ravel() * s, H.ravel()], 1)
-    O = P + np.array([0.0, 0.0, eps])
-    ntex = w * h
-    Hf = H.ravel()
-
-    def enters_below(tex, d):
-        """True where the ray from receiver `tex` along d goes into the bilinear surface at
-        t = 0+: its slope d_z is below the surface's one-sided directional derivative into the
-        quad it enters, (H[j][i±1]-H[j][i])|d_x|/s + (H[j±1][i]-H[j][i])|d_y|/s (the bilinear
-        uv term has no first-order part at a corner). A ray that leaves the domain at once
-        never does."""
-        if args.no_local_test:
-            return np.zeros(len(d), dtype=bool)
-        i, j = tex % w, tex // w
-        i1 = np.where(d[:, 0] >= 0, i + 1, i - 1)
-        j1 = np.where(d[:, 1] >= 0, j + 1, j - 1)
-        inside = (i1 >= 0) & (i1 < w) & (j1 >= 0) & (j1 < h)
-        i1c, j1c = np.clip(i1, 0, w - 1), np.clip(j1, 0, h - 1)
-        h0 = Hf[tex]
-        slope = ((Hf[j * w + i1c] - h0) * np.abs(d[:, 0]) + (Hf[j1c * w + i] - h0) * np.abs(d[:, 1])) / s
-        return inside & (d[:, 2] < slope)
-
-    def passes(label, pass_id, per_texel, fn):
-        """Run fn(texel_slice, key) over chunks of texels; fn returns a (len, 3) array."""
-        out = np.zeros((ntex, 3))
-        tpc = max(1, args.chunk // per_texel)
-        nch = (ntex + tpc - 1) // tpc
-        t0 = time.time()
-        for c in range(nch):
-            sl = slice(c * tpc, min(ntex, (c + 1) * tpc))
-            key = (args.seed * 1000003 + pass_id) & ((1 << 63) - 1)
-            out[sl] = fn(sl, key)
-            if c == nch - 1 or (c % max(1, nch // 10)) == 0:
-                el = time.time() - t0
-                log(f"{label}: chunk {c + 1}/{nch}, {el:.1f} s")
-        return out
-
-    # Direct: environment.
-    def env_chunk(sl, key):
-        nt = sl.stop - sl.start
-        loc = cosine_local(stratified(key, np.arange(sl.start, sl.stop), m))
-        rep = lambda a: np.repeat(a[sl], spp, axis=0)  # noqa: E731
-        d = to_world(loc, rep(N), rep(T), rep(B))
-        tex = np.repeat(np.arange(sl.start, sl.stop), spp)
-        vis = ~enters_below(tex, d)
-        vis[vis] = tracer.escapes(rep(O)[vis], d[vis])
-        L = sh_eval_rgb(env, d) * vis[:, None]
-        return math.pi * L.reshape(nt, spp, 3).mean(1)
-
-    E = passes("direct/environment", 0, spp, env_chunk)
-
-    # Direct: key lights as true caps.
-    for kidx, kl in enumerate(keys):
-        kd = np.asarray(kl["direction"], dtype=np.float64)
-        kd /= np.linalg.norm(kd)
-        alpha = float(kl["angular_radius"])
-        Lk = np.asarray(kl["radiance"], dtype=np.float64)
-        ca = math.cos(alpha)
-        omega = 2 * math.pi * (1 - ca)
-        kt, kb = onb(kd[None, :])
-
-        def key_chunk(sl, key, kd=kd, kt=kt, kb=kb, ca=ca, omega=omega, Lk=Lk):
-            nt = sl.stop - sl.start
-            loc = cap_local(stratified(key, np.arange(sl.start, sl.stop), mk), ca)
-            d = to_world(loc, kd[None, :], kt, kb)
-            Nr = np.repeat(N[sl], kspp, axis=0)
-            cos = np.einsum("ij,ij->i", Nr, d)
-            up = cos > 0
-            up &= ~enters_below(np.repeat(np.arange(sl.start, sl.stop), kspp), d)
-            vis = np.zeros(len(d), dtype=bool)
-            if up.any():
-                vis[up] = tracer.escapes(np.repeat(O[sl], kspp, axis=0)[up], d[up])
-            wgt = np.where(vis, cos, 0.0)
-            return omega * wgt.reshape(nt, kspp).mean(1)[:, None] * Lk[None, :]
-
-        E += passes(f"direct/key light {kidx}", 100 + kidx, kspp, key_chunk)
-
-    direct = rho[None, :] / math.pi * E
-    grid = direct.reshape(h, w, 3)
-
-    # Indirect bounces, fresh directions each bounce.
-    indirect = np.zeros_like(direct)
-    for b in range(1, bounces + 1):
-        prev = grid
-
-        def ind_chunk(sl, key, prev=prev):
-            nt = sl.stop - sl.start
-            loc = cosine_local(stratified(key, np.arange(sl.start, sl.stop), mb))
-            rep = lambda a: np.repeat(a[sl], bspp, axis=0)  # noqa: E731
-            d = to_world(loc, rep(N), rep(T), rep(B))
-            o = rep(O)
-            tex = np.repeat(np.arange(sl.start, sl.stop), bspp)
-            below = enters_below(tex, d)
-            t = np.full(len(d), np.inf)
-            t[~below] = tracer.hit_t(o[~below], d[~below])
-            hit = np.isfinite(t)
-            Lin = np.zeros((len(d), 3))
-            # Into the surface at t = 0+: the first hit is the receiver itself.
-            Lin[below] = prev.reshape(-1, 3)[tex[below]]
-            if hit.any():
-                p = o[hit] + t[hit, None] * d[hit]
-                Lin[hit] = bilinear(prev, p[:, 0] / s, p[:, 1] / s)
-            return rho[None, :] * Lin.reshape(nt, bspp, 3).mean(1)
-
-        Lb = passes(f"indirect/bounce {b}", 200 + b, bspp, ind_chunk)
-        indirect += Lb
-        grid = Lb.reshape(h, w, 3)
-
-    total = direct + indirect
-    img = np.concatenate([total, direct, np.zeros_like(direct), indirect], axis=1).reshape(h, w, 12)
-    names = ["R", "G", "B", "direct.R", "direct.G", "direct.B", "glossy.R", "glossy.G", "glossy.B",
-             "indirect.R", "indirect.G", "indirect.B"]
-    bmp = mi.Bitmap(np.ascontiguousarray(img.astype(np.float32)),
-                    pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    # Mitsuba 3.9.1's EXR writer deadlocks on a one-thread Dr.Jit pool (it waits on a task
-    # that it queued behind itself): give it a second thread for the write.
-    if dr.thread_count() < 2:
-        dr.set_thread_count(2)
-    bmp.write(args.out)
-    log(f"traced {tracer.rays / 1e6:.1f} M rays in {tracer.seconds:.1f} s "
-        f"({tracer.rays / max(tracer.seconds, 1e-9) / 1e6:.2f} M rays/s, variant {variant})")
+    pr = PeerRenderer(args.export_dir, args.refine, args.threads, args.eps, args.no_local_test, args.scalar)
+    sq = lambda n: max(1, int(round(math.sqrt(n)))) ** 2  # noqa: E731
+    spp, kspp = sq(args.spp), sq(args.key_spp if args.key_spp else args.spp)
+    bspp = sq(args.bounce_spp if args.bounce_spp else args.spp)
+    log(f"{args.export_dir}: {pr.w}x{pr.h}, s={pr.s}, bounces={pr.bounces}, {len(pr.keys)} key light(s), SH order "
+        f"{int(round(math.sqrt(pr.env.shape[0])))}, spp={spp} (stratified), key spp={kspp}, bounce spp={bspp}, "
+        f"eps={pr.eps:.3g}, seed={args.seed}")
+    direct = pr.direct(spp, kspp, args.seed, args.chunk)
+    indirect = pr.indirect(direct, bspp, seed=args.seed, chunk=args.chunk)
+    pr.write(args.out, direct, indirect)
+    t = pr.tracer
+    log(f"traced {t.rays / 1e6:.1f} M rays in {t.seconds:.1f} s "
+        f"({t.rays / max(t.seconds, 1e-9) / 1e6:.2f} M rays/s, variant {pr.variant})")
     log(f"means: direct {direct.mean(0)}, indirect {indirect.mean(0)}")
     log(f"wrote {args.out}")
 

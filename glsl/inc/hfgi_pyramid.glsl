@@ -35,6 +35,11 @@ const uint HFGI_FLAG_TANGENT = 4u; // ω_min = the exact tangent elevation, not 
 const uint HFGI_FLAG_ACCUMULATE = 8u; // add to the output (a later azimuth chunk of the same set)
 const uint HFGI_FLAG_MAX_BOUND = 16u; // the indirect scan skips what the max pyramid rules out
 const uint HFGI_FLAG_SWEEP = 32u; // visibility: ω_max from the line sweep's horizons, no scan
+// Flags that change between the dispatches of one pipeline (frame::shared::DYNAMIC_FLAGS). The
+// others, and the storage mode and wrap, are fixed at pipeline creation: the scanning shaders
+// take them from specialization constants (frame::shared::static_modes), because lavapipe runs
+// both sides of a branch even on a uniform value (docs/performance.md §5).
+const uint HFGI_DYNAMIC_FLAGS = HFGI_FLAG_ACCUMULATE | HFGI_FLAG_MAX_BOUND;
 
 // Value of table entry `plane` (level `l`, of a pyramid whose level 0 is `base`) at level-0
 // position p0. `raw`: the unfiltered level as a bilinear surface (gi.level0 = "bilinear"; only

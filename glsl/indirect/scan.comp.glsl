@@ -12,6 +12,12 @@ layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
 layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
 layout(constant_id = 3) const int HFGI_NE = 4;     // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
+// Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap, flags without
+// the dynamic bits, and radiance_stack): branches on them are compiled out (docs/performance.md §5).
+layout(constant_id = 4) const uint HFGI_STACK = 1u;
+layout(constant_id = 5) const uint HFGI_WRAP = 0u;
+layout(constant_id = 6) const uint HFGI_STATIC_FLAGS = 0u;
+layout(constant_id = 7) const uint HFGI_RSTACK = 1u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -182,7 +188,7 @@ void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running
     uint rl = hfgi_radiance_level[i - scan.first];
     float seg[HFGI_NE];
     hfgi_elevation(running, omega, seg);
-    vec3 rad = member_radiance(rl, q, omega, d, scan.work, pc.radiance_stack != 0u, wrap, scan.raw0);
+    vec3 rad = member_radiance(rl, q, omega, d, scan.work, HFGI_RSTACK != 0u, wrap, scan.raw0);
     for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
     running = omega;
     running_slope = slope;
@@ -198,58 +204,84 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
     // samples between ladder samples more than a texel apart, at most one per texel of the
     // gap (thin spikes the ladder steps over; docs/accuracy.md §4). One loop, not two
     // nested: lavapipe pays for an inner loop even when it runs no iteration.
+    // "While-while" (Aila & Laine 2009): the inner loop only advances until the next member,
+    // and the member's work (elevation moments, radiance, accumulation) runs in the outer loop.
+    // lavapipe executes every branch of a loop body on all its SIMD lanes, so with the member
+    // inside the sample loop every sample paid for a member (docs/performance.md §5).
     float t_prev = 0.0, t = 0.0;
     vec2 q = scan.p;
     uint lv = 0u;
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
-    while (i < scan.end) {
-        if (np < 0) {
-            t = hfgi_scan_t(scan, i, HFGI_NV);
-            q = scan.p + t * d;
-            if (!hfgi_scan_inside(scan, q)) break;
-            lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-            // The max pyramid's bound: nothing past t_prev can rise above the running
-            // slope → stop; nothing on level 0 in (t_prev, t] can → no probes, and no
-            // sample when it reads level 0. Conservative: the members are the same.
-            bool clear = false;
-            if (bounded) {
-                if (t_prev > 0.0 && gmax - bmin <= running_slope * t_prev * scan.texel_size) break;
-                float m = max_over(scan.p + t_prev * d, q, uvec2(scan.n0)) - hfgi_base[0];
-                clear = m <= running_slope * (m > 0.0 ? t_prev : t) * scan.texel_size;
+    bool more = true;
+    while (more) {
+        bool found = false;
+        float sp = 0.0;
+        vec2 qp = q;
+        int im = i;
+        while (true) {
+            if (i >= scan.end) {
+                more = false;
+                break;
             }
-            np = clear ? 0 : clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
-            s2 = 1;
-            if (clear && lv == 0u) {
+            if (np < 0) {
+                t = hfgi_scan_t(scan, i, HFGI_NV);
+                q = scan.p + t * d;
+                if (!hfgi_scan_inside(scan, q)) {
+                    more = false;
+                    break;
+                }
+                lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
+                // The max pyramid's bound: nothing past t_prev can rise above the running
+                // slope → stop; nothing on level 0 in (t_prev, t] can → no probes, and no
+                // sample when it reads level 0. Conservative: the members are the same.
+                bool clear = false;
+                if (bounded) {
+                    if (t_prev > 0.0 && gmax - bmin <= running_slope * t_prev * scan.texel_size) {
+                        more = false;
+                        break;
+                    }
+                    float m = max_over(scan.p + t_prev * d, q, uvec2(scan.n0)) - hfgi_base[0];
+                    clear = m <= running_slope * (m > 0.0 ? t_prev : t) * scan.texel_size;
+                }
+                np = clear ? 0 : clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
+                s2 = 1;
+                if (clear && lv == 0u) {
+                    t_prev = t;
+                    ++i;
+                    np = -1;
+                    continue;
+                }
+            }
+            bool probe = s2 <= np;
+            float tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
+            qp = scan.p + tp * d;
+            uint lq = probe ? 0u : lv;
+            sp = (hfgi_height_at(scan, lq, qp) - hfgi_base[lq]) / (tp * scan.texel_size);
+            im = i;
+            if (probe) {
+                ++s2;
+            } else {
                 t_prev = t;
                 ++i;
                 np = -1;
-                continue;
+            }
+            if (sp > running_slope) {
+                found = true;
+                break;
             }
         }
-        bool probe = s2 <= np;
-        float tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
-        vec2 qp = scan.p + tp * d;
-        uint lq = probe ? 0u : lv;
-        float sp = (hfgi_height_at(scan, lq, qp) - hfgi_base[lq]) / (tp * scan.texel_size);
-        if (sp > running_slope) cast_member(u, running, running_slope, sp, i, qp, d, scan, wrap);
-        if (probe) {
-            ++s2;
-        } else {
-            t_prev = t;
-            ++i;
-            np = -1;
-        }
+        if (found) cast_member(u, running, running_slope, sp, im, qp, d, scan, wrap);
     }
 }
 
 void main() {
     uvec2 r = gl_GlobalInvocationID.xy;
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
-    bool wrap = pc.wrap != 0u;
+    bool wrap = HFGI_WRAP != 0u;
     hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
-                                     pc.texel_size, pc.stack_mode != 0u, wrap, pc.flags, pc.scan_extent, HFGI_NV);
+                                     pc.texel_size, HFGI_STACK != 0u, wrap, HFGI_STATIC_FLAGS, pc.scan_extent, HFGI_NV);
     vec3 N = normal_at(scan.p, wrap);
-    bool tangent = (pc.flags & HFGI_FLAG_TANGENT) != 0u;
+    bool tangent = (HFGI_STATIC_FLAGS & HFGI_FLAG_TANGENT) != 0u;
     float bmin = 3.402823466e38;
     // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
     [[dont_unroll]] for (int l = 0; l < HFGI_NV; ++l) {
@@ -275,7 +307,7 @@ void main() {
         if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running + 1e-5) {
             float seg[HFGI_NE];
             hfgi_elevation(running, limit, seg);
-            vec3 rad = member_radiance(0u, scan.p, limit, d, scan.work, pc.radiance_stack != 0u, wrap, scan.raw0);
+            vec3 rad = member_radiance(0u, scan.p, limit, d, scan.work, HFGI_RSTACK != 0u, wrap, scan.raw0);
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }

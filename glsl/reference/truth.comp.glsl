@@ -17,6 +17,12 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const int HFGI_NODES = 16;
+// Fixed for a reference run (frame::truth: the push constants' wrap, march and sh_visibility):
+// branches on them are compiled out, since lavapipe runs both sides of a branch even on a
+// uniform value (docs/performance.md §5).
+layout(constant_id = 2) const uint HFGI_WRAP = 0u;
+layout(constant_id = 3) const uint HFGI_MARCH = 0u;
+layout(constant_id = 4) const uint HFGI_SHVIS = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Heights { float hfgi_h[]; };       // W×H
@@ -32,7 +38,7 @@ layout(push_constant) uniform Push { hfgi_TruthPush pc; };
 
 // Index of texel t, clamped to the edge or periodic with wrap.
 uint texel_index(ivec2 t) {
-    bool wrap = pc.wrap != 0u;
+    bool wrap = HFGI_WRAP != 0u;
     t = ivec2(hfgi_address(t.x, int(pc.width), wrap), hfgi_address(t.y, int(pc.height), wrap));
     return uint(t.y) * pc.width + uint(t.x);
 }
@@ -62,15 +68,15 @@ vec3 bilinear_source(vec2 q) {
 // CONVENTIONS.md normal (one-sided at the border, periodic with wrap).
 vec3 normal_at(ivec2 p) {
     int w = int(pc.width), h = int(pc.height);
-    ivec2 a = pc.wrap != 0u ? p - 1 : max(p - 1, ivec2(0));
-    ivec2 b = pc.wrap != 0u ? p + 1 : min(p + 1, ivec2(w - 1, h - 1));
+    ivec2 a = HFGI_WRAP != 0u ? p - 1 : max(p - 1, ivec2(0));
+    ivec2 b = HFGI_WRAP != 0u ? p + 1 : min(p + 1, ivec2(w - 1, h - 1));
     float hx = (height_at(ivec2(b.x, p.y)) - height_at(ivec2(a.x, p.y))) / (float(b.x - a.x) * pc.texel_size);
     float hy = (height_at(ivec2(p.x, b.y)) - height_at(ivec2(p.x, a.y))) / (float(b.y - a.y) * pc.texel_size);
     return normalize(vec3(-hx, -hy, 1.0));
 }
 
 bool inside(vec2 q, float t) {
-    if (pc.wrap != 0u) return t <= float(max(pc.width, pc.height));
+    if (HFGI_WRAP != 0u) return t <= float(max(pc.width, pc.height));
     return q.x >= 0.0 && q.y >= 0.0 && q.x <= float(pc.width - 1u) && q.y <= float(pc.height - 1u);
 }
 
@@ -79,7 +85,7 @@ bool inside(vec2 q, float t) {
 // unbounded loops short after a few thousand iterations.
 uint march_bound(vec2 p, vec2 d) {
     float t = float(max(pc.width, pc.height));
-    if (pc.wrap == 0u) {
+    if (HFGI_WRAP == 0u) {
         vec2 hi = vec2(float(pc.width - 1u), float(pc.height - 1u));
         float tx = d.x > 1e-6 ? (hi.x - p.x) / d.x : (d.x < -1e-6 ? -p.x / d.x : 1e9);
         float ty = d.y > 1e-6 ? (hi.y - p.y) / d.y : (d.y < -1e-6 ? -p.y / d.y : 1e9);
@@ -98,7 +104,7 @@ struct Piece { float t0; float t1; float a; float b; float c; };
 struct Ray { ivec2 p; vec2 d; float h0; float t_end; vec2 inv; float kx; float ky; float ta; };
 
 float ray_end(vec2 p, vec2 d) {
-    if (pc.wrap != 0u) return float(max(pc.width, pc.height));
+    if (HFGI_WRAP != 0u) return float(max(pc.width, pc.height));
     vec2 hi = vec2(float(pc.width - 1u), float(pc.height - 1u));
     float tx = d.x > 0.0 ? (hi.x - p.x) / d.x : (d.x < 0.0 ? p.x / -d.x : 1e30);
     float ty = d.y > 0.0 ? (hi.y - p.y) / d.y : (d.y < 0.0 ? p.y / -d.y : 1e30);
@@ -124,7 +130,7 @@ uint piece_bound(Ray r) {
 // the receiver first (f32 robustness).
 Piece cell_piece(Ray r, float ta, float tb) {
     ivec2 c = ivec2(floor(vec2(r.p) + (0.5 * (ta + tb)) * r.d));
-    if (pc.wrap == 0u) c = clamp(c, ivec2(0), max(ivec2(int(pc.width) - 2, int(pc.height) - 2), ivec2(0)));
+    if (HFGI_WRAP == 0u) c = clamp(c, ivec2(0), max(ivec2(int(pc.width) - 2, int(pc.height) - 2), ivec2(0)));
     float g00 = height_at(c) - r.h0, g10 = height_at(c + ivec2(1, 0)) - r.h0;
     float g01 = height_at(c + ivec2(0, 1)) - r.h0, g11 = height_at(c + ivec2(1, 1)) - r.h0;
     float ca = g10 - g00, cb = g01 - g00, cc = (g00 - g10) + (g11 - g01);
@@ -189,7 +195,7 @@ float first_reach(Piece q, float k, float tau_max) {
 // Horizon elevation from vertex p along d (−π/2 where the ray leaves the domain at once).
 float horizon(ivec2 p, vec2 d, float h0) {
     float hor = -1.5707963267948966;
-    if (pc.march != 0u) {
+    if (HFGI_MARCH != 0u) {
         uint bound = march_bound(vec2(p), d);
         for (uint k = 1u; k <= bound; ++k) {
             float t = float(k) * pc.step;
@@ -218,7 +224,7 @@ void add_hit(int e, float mid, float half_w, vec2 d, vec3 N, float dphi, vec2 hi
     vec3 r = bilinear_source(hit);
     float wt = half_w * hfgi_gauss[e].y * cos(om) * dphi;
     vec3 dir = vec3(cos(om) * d, sin(om));
-    if (pc.sh_visibility != 0u) {
+    if (HFGI_SHVIS != 0u) {
         hfgi_sh_eval(dir);
         for (int c = 0; c < HFGI_N2; ++c) hfgi_acc[c] += wt * hfgi_y[c] * r;
     } else {
@@ -232,7 +238,7 @@ void add_hit(int e, float mid, float half_w, vec2 d, vec3 N, float dphi, vec2 hi
 void bounce_azimuth(ivec2 p, vec2 d, float h0, vec3 N, float dphi, float hor, float tangent) {
     float half_w = 0.5 * (hor - tangent), mid = 0.5 * (hor + tangent);
     int e = 0;
-    if (pc.march != 0u) {
+    if (HFGI_MARCH != 0u) {
         float running = -1.5707963267948966;
         uint bound = march_bound(vec2(p), d);
         vec2 hit = vec2(p);
@@ -272,7 +278,7 @@ void bounce_azimuth(ivec2 p, vec2 d, float h0, vec3 N, float dphi, float hor, fl
 
 // Open directions of one uniform azimuth: the environment (exact) or V (SH mode).
 void direct_azimuth(vec2 d, vec3 N, float dphi, float hor, float tangent) {
-    bool sh_mode = pc.sh_visibility != 0u;
+    bool sh_mode = HFGI_SHVIS != 0u;
     float lo = sh_mode ? hor : max(hor, tangent);
     float half_w = 0.5 * (1.5707963267948966 - lo), mid = 0.5 * (1.5707963267948966 + lo);
     for (int e = 0; e < HFGI_NODES; ++e) {
@@ -316,7 +322,7 @@ void main() {
     if (p.x >= int(pc.width) || p.y >= int(pc.height) || gl_GlobalInvocationID.y >= pc.rows) return;
     float h0 = height_at(p);
     vec3 N = normal_at(p);
-    bool sh_mode = pc.sh_visibility != 0u;
+    bool sh_mode = HFGI_SHVIS != 0u;
     bool indirect = pc.indirect != 0u;
     for (int k = 0; k < HFGI_N2; ++k) hfgi_acc[k] = vec3(0.0);
     float dphi = 6.283185307179586 / float(pc.azimuths);

@@ -10,6 +10,11 @@
 // the full description, is src/reference/sweep.rs; both take the same steps.
 #include "hfgi_shared.glsl"
 layout(local_size_x = 64) in;
+// Static modes (frame::shared::static_modes: the push constants' stack_mode and flags; no wrap):
+// branches on them are compiled out (docs/performance.md §5).
+layout(constant_id = 0) const uint HFGI_STACK = 1u;
+layout(constant_id = 1) const uint HFGI_WRAP = 0u;
+layout(constant_id = 2) const uint HFGI_STATIC_FLAGS = 0u;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
@@ -131,7 +136,7 @@ void main() {
     if (li >= pc.line_count || ai >= pc.sample_count) return;
     vec2 dd = hfgi_samples[pc.sample_offset + ai].xy;
     hfgi_Scan scan = hfgi_scan_begin(uvec2(0u), uvec2(pc.work_width, pc.work_height), 1u, 0u, pc.texel_size,
-                                     pc.stack_mode != 0u, false, pc.flags, 0u, 1);
+                                     HFGI_STACK != 0u, false, HFGI_STATIC_FLAGS, 0u, 1);
     hfgi_SweepFrame f;
     f.swap = abs(dd.y) > abs(dd.x);
     f.d = f.swap ? dd.yx : dd;

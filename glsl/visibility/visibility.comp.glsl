@@ -12,6 +12,11 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // pyramid levels n_v
 layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
+// Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap and flags
+// without the dynamic bits): branches on them are compiled out (docs/performance.md §5).
+layout(constant_id = 3) const uint HFGI_STACK = 1u;
+layout(constant_id = 4) const uint HFGI_WRAP = 0u;
+layout(constant_id = 5) const uint HFGI_STATIC_FLAGS = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -121,13 +126,13 @@ void main() {
     uvec2 r = gl_GlobalInvocationID.xy;
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
     hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
-                                     pc.texel_size, pc.stack_mode != 0u, pc.wrap != 0u, pc.flags, pc.scan_extent,
+                                     pc.texel_size, HFGI_STACK != 0u, HFGI_WRAP != 0u, HFGI_STATIC_FLAGS, pc.scan_extent,
                                      HFGI_NV);
-    bool sweep = (pc.flags & HFGI_FLAG_SWEEP) != 0u;
+    bool sweep = (HFGI_STATIC_FLAGS & HFGI_FLAG_SWEEP) != 0u;
     if (!sweep)
         // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
         [[dont_unroll]] for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
-    bool samples_max = (pc.flags & HFGI_FLAG_HORIZON_SAMPLES) != 0u;
+    bool samples_max = (HFGI_STATIC_FLAGS & HFGI_FLAG_HORIZON_SAMPLES) != 0u;
     uint receivers = pc.work_width * pc.work_height;
 
     float V[HFGI_N2];

@@ -114,7 +114,7 @@ impl IndirectPass {
         let mut pipes: Vec<ComputePipeline> = Vec::new();
         let mut radiance = None;
         let mut max = None;
-        let made = (|| -> Result<(vk::DescriptorSet, vk::DescriptorSet)> {
+        let made = (|| -> Result<(vk::DescriptorSet, vk::DescriptorSet, IndirectPush)> {
             for (name, size) in buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len()) {
                 bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
             }
@@ -133,6 +133,27 @@ impl IndirectPass {
                     incident_bounce: &bufs[INCIDENT],
                 },
             )?);
+            let push = IndirectPush {
+                work_width: ww,
+                work_height: wh,
+                wrap: scene.wrap as u32,
+                level_step: gi.level_step,
+                level_bias: gi.level_step * gi.level_offset,
+                texel_size: scene.texel_size as f32,
+                stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
+                sample_count: samples.len() as u32,
+                radiance_levels: rad.pyramid.layout().count() as u32,
+                radiance_stack: (rad.pyramid.mode() == PyramidMode::Stack) as u32,
+                flags: super::shared::scan_flags(gi),
+                scan_extent: super::shared::scan_extent(gi),
+                specular: {
+                    let k = scene.material.specular.unwrap_or([0.0; 3]);
+                    [k[0], k[1], k[2], 0.0]
+                },
+                sample_offset: 0,
+                probes: gi.radial_probes,
+                pad: [0; 2],
+            };
             // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
             let layout = pyramid.layout();
             let n_u = rad.pyramid.layout().count();
@@ -155,11 +176,16 @@ impl IndirectPass {
                 &[DescriptorKind::StorageBuffer; 12],
                 std::mem::size_of::<IndirectPush>() as u32,
                 &[
-                    (0, n as u32),
-                    (1, layout.count() as u32),
-                    (2, vector as u32),
-                    (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
-                ],
+                    &[
+                        (0, n as u32),
+                        (1, layout.count() as u32),
+                        (2, vector as u32),
+                        (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
+                        (7, push.radiance_stack),
+                    ][..],
+                    &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags),
+                ]
+                .concat(),
                 1,
             )?;
             let scan = pipes.push_get(scan);
@@ -207,9 +233,9 @@ impl IndirectPass {
                     Bind::Buffer(&bufs[INCIDENT]),
                 ],
             )?;
-            Ok((scan_set, shade_set))
+            Ok((scan_set, shade_set, push))
         })();
-        let (scan_set, shade_set) = match made {
+        let (scan_set, shade_set, push) = match made {
             Ok(s) => s,
             Err(e) => {
                 bufs.into_iter().for_each(|b| b.destroy(ctx));
@@ -225,27 +251,6 @@ impl IndirectPass {
         };
         let shade_pipe = pipes.pop().expect("shade");
         let scan_pipe = pipes.pop().expect("scan");
-        let push = IndirectPush {
-            work_width: ww,
-            work_height: wh,
-            wrap: scene.wrap as u32,
-            level_step: gi.level_step,
-            level_bias: gi.level_step * gi.level_offset,
-            texel_size: scene.texel_size as f32,
-            stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
-            sample_count: samples.len() as u32,
-            radiance_levels: radiance.as_ref().map_or(0, |r| r.pyramid.layout().count() as u32),
-            radiance_stack: radiance.as_ref().is_some_and(|r| r.pyramid.mode() == PyramidMode::Stack) as u32,
-            flags: super::shared::scan_flags(gi),
-            scan_extent: super::shared::scan_extent(gi),
-            specular: {
-                let k = scene.material.specular.unwrap_or([0.0; 3]);
-                [k[0], k[1], k[2], 0.0]
-            },
-            sample_offset: 0,
-            probes: gi.radial_probes,
-            pad: [0; 2],
-        };
         let e = elevation::gpu_size(gi.elevation_basis, n);
         Ok(Self {
             radiance: radiance.expect("radiance"),
@@ -256,7 +261,8 @@ impl IndirectPass {
             shade_set,
             buffers: bufs,
             chunks: [gi.radial_probes, gi.radial_probes_later].map(|p| {
-                let cost = (ladder.len() * (1 + p as usize) + n * n) * e;
+                // A member adds an outer iteration of the scan's while-while loop and an e-vector.
+                let cost = ladder.len() * (1 + p as usize) * (e + 1) + n * n * e;
                 azimuth_chunks(push.sample_count, cost as u32, INDIRECT_LOOP_BUDGET)
             }),
             push,

@@ -40,6 +40,20 @@ pub const FLAG_ACCUMULATE: u32 = 8;
 /// `HFGI_FLAG_MAX_BOUND`: the indirect scan skips the intervals and the far end that the max
 /// pyramid (stage `pyramid.max`) rules out.
 pub const FLAG_MAX_BOUND: u32 = 16;
+/// The flags that change between the dispatches of one pipeline (`HFGI_DYNAMIC_FLAGS`); every
+/// other bit is fixed when the pipeline is created and reaches the shader as a specialization
+/// constant too ([`static_modes`]).
+pub const DYNAMIC_FLAGS: u32 = FLAG_ACCUMULATE | FLAG_MAX_BOUND;
+
+/// Specialization constants `first_id`, `first_id + 1`, `first_id + 2` of a scanning shader: the
+/// storage mode (1: stack), periodic addressing and the static flags — the same values as the
+/// push constants' `stack_mode`, `wrap` and `flags` (minus [`DYNAMIC_FLAGS`]). lavapipe executes
+/// both sides of a branch even on a uniform value, so a path that the pipeline never takes (the
+/// true pyramid's B-spline reads in stack mode, periodic addressing, the other ω_min) cost as
+/// much as the one it takes; as constants, the compiler removes them (docs/performance.md §5).
+pub fn static_modes(first_id: u32, stack_mode: u32, wrap: u32, flags: u32) -> [(u32, u32); 3] {
+    [(first_id, stack_mode), (first_id + 1, wrap), (first_id + 2, flags & !DYNAMIC_FLAGS)]
+}
 /// `HFGI_FLAG_SWEEP`: the visibility pass reads `ω_max` from the line sweep's horizons.
 pub const FLAG_SWEEP: u32 = 32;
 
@@ -50,8 +64,9 @@ pub const FLAG_SWEEP: u32 = 32;
 /// lavapipe silently ends an invocation's loops after 65535 iterations in total
 /// (docs/accuracy.md §1).
 pub const VISIBILITY_LOOP_BUDGET: u32 = 40_000;
-/// The same for the indirect scan, counted as `(ladder + n²) · e` per azimuth (every
-/// casting-set member adds an `e`-vector, then the fold): 16 azimuths × 130 samples × 21 (44k)
+/// The same for the indirect scan, counted as `ladder · (e + 1) + n² · e` per azimuth (every
+/// casting-set member adds an iteration of the outer loop and an `e`-vector, then the fold; the
+/// ladder counts each radial probe): 16 azimuths × 130 samples × 21 (44k)
 /// was measured intact, 128 × 130 × 21 lost most of the indirect light, and so did order 8 when
 /// each member still evaluated the 36 legendre integrals (8 × 36 loop iterations a member).
 pub const INDIRECT_LOOP_BUDGET: u32 = 40_000;

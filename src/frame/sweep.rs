@@ -101,10 +101,13 @@ impl SweepPass {
             }
         };
         let stack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
-        let made = ComputePipeline::with_storage_set(
+        let stack_mode = (pyramid.mode() == PyramidMode::Stack) as u32;
+        let raw0 = super::shared::scan_flags(&scene.gi) & FLAG_RAW_LEVEL0;
+        let made = ComputePipeline::with_storage_set_spec(
             ctx,
             &shaders::VISIBILITY_SWEEP_COMP,
             std::mem::size_of::<SweepPush>() as u32,
+            &super::shared::static_modes(0, stack_mode, 0, raw0),
             &[
                 Bind::Buffer(pyramid.levels_buffer()),
                 Bind::Buffer(pyramid.table_buffer()),
@@ -122,11 +125,10 @@ impl SweepPass {
                 return Err(e);
             }
         };
-        let raw0 = super::shared::scan_flags(&scene.gi) & FLAG_RAW_LEVEL0;
         let push = SweepPush {
             work_width: ww,
             work_height: wh,
-            stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
+            stack_mode,
             flags: raw0,
             texel_size: scene.texel_size as f32,
             hull_capacity: plan.hull_capacity,

@@ -169,7 +169,13 @@ pub fn render_truth_gpu_timed(
             &shaders::REFERENCE_TRUTH_COMP,
             &[DescriptorKind::StorageBuffer; 7],
             std::mem::size_of::<TruthPush>() as u32,
-            &[(0, n as u32), (1, settings.nodes)],
+            &[
+                (0, n as u32),
+                (1, settings.nodes),
+                (2, scene.wrap as u32),
+                (3, settings.march as u32),
+                (4, settings.sh_visibility as u32),
+            ],
             1,
         )?);
         let binds: Vec<Bind> = bufs.iter().map(Bind::Buffer).collect();

@@ -139,6 +139,20 @@ impl VisibilityPass {
         let mut pipeline = None;
         let mut sweep = None;
         let max_set = sets.iter().map(|s| s.count as usize).max().unwrap_or(0);
+        let sweeps = scene.gi.visibility == VisibilityMethod::Sweep && max_set > 0;
+        let push = VisibilityPush {
+            wrap: pyramid.wrap() as u32,
+            work_width: ww,
+            work_height: wh,
+            level_step: scene.gi.level_step,
+            level_bias: scene.gi.level_step * scene.gi.level_offset,
+            texel_size: scene.texel_size as f32,
+            stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
+            flags: super::shared::scan_flags(&scene.gi) | if sweeps { FLAG_SWEEP } else { 0 },
+            sweep_near: scene.gi.sweep_near as f32,
+            scan_extent: super::shared::scan_extent(&scene.gi),
+            ..Default::default()
+        };
         let made = (|| -> Result<vk::DescriptorSet> {
             for (name, size) in sizes {
                 parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
@@ -147,7 +161,7 @@ impl VisibilityPass {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
                 memory::upload_f32(ctx, &parts[1], 0, &fold)?;
             }
-            if scene.gi.visibility == VisibilityMethod::Sweep && max_set > 0 {
+            if sweeps {
                 sweep = Some(SweepPass::new(ctx, pyramid, &parts[0], scene, max_set)?);
             }
             let p = pipeline.insert(ComputePipeline::new(
@@ -156,10 +170,14 @@ impl VisibilityPass {
                 &[DescriptorKind::StorageBuffer; 7],
                 std::mem::size_of::<VisibilityPush>() as u32,
                 &[
-                    (0, n as u32),
-                    (1, pyramid.layout().count() as u32),
-                    (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
-                ],
+                    &[
+                        (0, n as u32),
+                        (1, pyramid.layout().count() as u32),
+                        (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
+                    ][..],
+                    &super::shared::static_modes(3, push.stack_mode, push.wrap, push.flags),
+                ]
+                .concat(),
                 1,
             )?);
             let stack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
@@ -192,19 +210,6 @@ impl VisibilityPass {
         let vis = parts.pop().expect("v");
         let fold_buf = parts.pop().expect("fold");
         let samples_buf = parts.pop().expect("samples");
-        let push = VisibilityPush {
-            wrap: pyramid.wrap() as u32,
-            work_width: ww,
-            work_height: wh,
-            level_step: scene.gi.level_step,
-            level_bias: scene.gi.level_step * scene.gi.level_offset,
-            texel_size: scene.texel_size as f32,
-            stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
-            flags: super::shared::scan_flags(&scene.gi) | if sweep.is_some() { FLAG_SWEEP } else { 0 },
-            sweep_near: scene.gi.sweep_near as f32,
-            scan_extent: super::shared::scan_extent(&scene.gi),
-            ..Default::default()
-        };
         Ok(Self {
             pipeline: pipeline.expect("pipeline"),
             descriptors,

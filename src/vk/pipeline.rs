@@ -107,8 +107,19 @@ impl ComputePipeline {
         push_size: u32,
         binds: &[Bind],
     ) -> Result<(Self, vk::DescriptorSet)> {
+        Self::with_storage_set_spec(ctx, shader, push_size, &[], binds)
+    }
+
+    /// [`Self::with_storage_set`] with specialization constants `spec` (id, value).
+    pub fn with_storage_set_spec(
+        ctx: &Context,
+        shader: &Spirv,
+        push_size: u32,
+        spec: &[(u32, u32)],
+        binds: &[Bind],
+    ) -> Result<(Self, vk::DescriptorSet)> {
         let kinds = vec![DescriptorKind::StorageBuffer; binds.len()];
-        let mut p = Self::new(ctx, shader, &kinds, push_size, &[], 1)?;
+        let mut p = Self::new(ctx, shader, &kinds, push_size, spec, 1)?;
         match p.allocate_set(ctx, binds) {
             Ok(set) => Ok((p, set)),
             Err(e) => {

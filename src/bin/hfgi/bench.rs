@@ -57,6 +57,14 @@ pub struct BenchArgs {
     /// Output folder: results.csv, results.md, pareto-<scene>.png.
     #[arg(long, default_value = "out/bench")]
     pub(crate) out: PathBuf,
+    /// Also write each exact reference to DIR/reference-<scene>-n<order>.exr (the layers of
+    /// `hfgi reference --shading-exr`, diffuse, `--bounces` bounces), e.g. for tools/peer-ratio.
+    #[arg(long)]
+    pub(crate) save_references: bool,
+    /// Skip the SH-visibility reference (its error columns read "—"), which halves the
+    /// reference time when only the error against the exact truth is wanted.
+    #[arg(long)]
+    pub(crate) no_sh_visibility: bool,
     /// Timing only (no references, any device): the median frame per stage, fps and memory over
     /// table 1's grid (256², 512², 1024², or `--size`; sub-sampling 4×, 2×, 1×; 1–3 bounces)
     /// on the first of `--scenes` (default: the default scene), cheapest first, until `--budget`
@@ -247,6 +255,69 @@ fn stage_table(md: &mut String, rows: Vec<&Row>) {
     let _ = writeln!(md, "| **frame** | {} |", totals.join(" | "));
 }
 
+/// A scene's ground truths at each SH order: (order, exact, exact ms, SH-visibility unless
+/// `--no-sh-visibility`), with `max_b` bounces. Records the times at the scene's own order in
+/// `references` and, with `--save-references`, writes each exact truth to
+/// `DIR/reference-<name>-n<order>.exr`.
+#[allow(clippy::too_many_arguments)]
+fn truths(
+    ctx: &Context,
+    a: &BenchArgs,
+    scene: &Scene,
+    name: &str,
+    orders: &[usize],
+    max_b: u32,
+    bar: &indicatif::ProgressBar,
+    references: &mut Vec<(String, Option<f64>, Option<f64>)>,
+) -> Result<Vec<Truths>> {
+    let mut truths: Vec<Truths> = Vec::new();
+    for &n in orders {
+        bar.set_message(format!("{name}: references at order {n}"));
+        let mut truth_scene = scene.clone();
+        truth_scene.gi.bounces = max_b;
+        truth_scene.gi.sh_order = n;
+        let ts = TruthSettings { azimuths: a.reference_azimuths, ..Default::default() };
+        // The exact reference depends on the order only through the lighting: without key
+        // lights and with no environment bands between two orders it is the same.
+        let same = |m: usize| {
+            let (lo, hi) = (m.min(n), m.max(n));
+            scene.key_lights.is_empty()
+                && scene
+                    .environment
+                    .sh
+                    .iter()
+                    .skip(lo * lo)
+                    .take(hi * hi - lo * lo)
+                    .all(|c| c.iter().all(|v| *v == 0.0))
+        };
+        let (exact, exact_ms) = match truths.iter().find(|(m, _, _, _)| same(*m)) {
+            Some((_, e, ms, _)) => (clone_truth(e), *ms),
+            None => hfgi::frame::truth::render_truth_gpu_timed(ctx, &truth_scene, &ts, &mut |_, _| {})?,
+        };
+        bar.inc(1);
+        if a.save_references {
+            let path = a.out.join(format!("reference-{name}-n{n}.exr"));
+            super::reference::write_truth_exr(&path, &exact)?;
+        }
+        let (shvis, shvis_ms) = if a.no_sh_visibility {
+            (None, None)
+        } else {
+            let shv_settings = TruthSettings { sh_visibility: true, ..ts };
+            let (t, ms) = hfgi::frame::truth::render_truth_gpu_timed(ctx, &truth_scene, &shv_settings, &mut |_, _| {})?;
+            bar.inc(1);
+            (Some(t), ms)
+        };
+        if n == scene.gi.sh_order || (truths.is_empty() && !orders.contains(&scene.gi.sh_order)) {
+            references.push((name.to_string(), exact_ms, shvis_ms));
+        }
+        truths.push((n, exact, exact_ms, shvis));
+    }
+    Ok(truths)
+}
+
+/// One SH order's ground truths: (order, exact, exact ms, SH-visibility).
+type Truths = (usize, TruthOutput, Option<f64>, Option<TruthOutput>);
+
 fn clone_truth(t: &TruthOutput) -> TruthOutput {
     TruthOutput::assemble(t.width, t.height, t.direct.clone(), t.indirect_bounces.clone())
 }
@@ -399,46 +470,12 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         let mut orders: Vec<usize> = cfgs.iter().map(|(_, g)| g.sh_order).collect();
         orders.sort();
         orders.dedup();
-        let bar = indicatif::ProgressBar::new(cfgs.len() as u64 + 2 * orders.len() as u64);
+        let per_order = if a.no_sh_visibility { 1 } else { 2 };
+        let bar = indicatif::ProgressBar::new(cfgs.len() as u64 + per_order * orders.len() as u64);
         if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} {wide_bar} {pos}/{len} [{elapsed} < {eta}]") {
             bar.set_style(style);
         }
-        // Both references at every SH order the configurations use (the SH-visibility one
-        // depends on it; so does the exact one when the lighting has more bands).
-        let mut truths = Vec::new();
-        for &n in &orders {
-            bar.set_message(format!("{name}: references at order {n}"));
-            let mut truth_scene = scene.clone();
-            truth_scene.gi.bounces = max_b;
-            truth_scene.gi.sh_order = n;
-            let ts = TruthSettings { azimuths: a.reference_azimuths, ..Default::default() };
-            // The exact reference depends on the order only through the lighting: without key
-            // lights and with no environment bands between two orders it is the same.
-            let same = |m: usize| {
-                let (lo, hi) = (m.min(n), m.max(n));
-                scene.key_lights.is_empty()
-                    && scene
-                        .environment
-                        .sh
-                        .iter()
-                        .skip(lo * lo)
-                        .take(hi * hi - lo * lo)
-                        .all(|c| c.iter().all(|v| *v == 0.0))
-            };
-            let (exact, exact_ms) = match truths.iter().find(|(m, _, _, _)| same(*m)) {
-                Some((_, e, ms, _)) => (clone_truth(e), *ms),
-                None => hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &ts, &mut |_, _| {})?,
-            };
-            bar.inc(1);
-            let shv_settings = TruthSettings { sh_visibility: true, ..ts };
-            let (shvis, shvis_ms) =
-                hfgi::frame::truth::render_truth_gpu_timed(&ctx, &truth_scene, &shv_settings, &mut |_, _| {})?;
-            bar.inc(1);
-            if n == scene.gi.sh_order || (truths.is_empty() && !orders.contains(&scene.gi.sh_order)) {
-                references.push((name.clone(), exact_ms, shvis_ms));
-            }
-            truths.push((n, exact, exact_ms, shvis));
-        }
+        let truths = truths(&ctx, &a, &scene, &name, &orders, max_b, &bar, &mut references)?;
         for (knob, gi) in cfgs {
             bar.set_message(format!("{name}: {knob}"));
             let mut s = scene.clone();
@@ -446,11 +483,12 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             s.gi.amortize = false;
             let (stages, memory, layers) = measure(&ctx, &s, a.frames).with_context(|| format!("{name}: {knob}"))?;
             let (_, exact, _, shvis) = truths.iter().find(|(n, _, _, _)| *n == gi.sh_order).expect("reference");
-            let (e, v) = (truth_layers(exact, gi.bounces), truth_layers(shvis, gi.bounces));
             let got = [&layers.direct, &layers.indirect, &layers.total];
             let err = |r: &[Vec<[f64; 3]>; 3]| [0, 1, 2].map(|i| rel_l2(got[i], &r[i]));
+            let e = truth_layers(exact, gi.bounces);
+            let v = shvis.as_ref().map_or([f64::NAN; 3], |t| err(&truth_layers(t, gi.bounces)));
             let total_ms = stages.iter().map(|(_, ms)| ms).sum();
-            rows.push(Row { scene: name.clone(), knob, gi, stages, total_ms, memory, exact: err(&e), shvis: err(&v) });
+            rows.push(Row { scene: name.clone(), knob, gi, stages, total_ms, memory, exact: err(&e), shvis: v });
             bar.inc(1);
         }
         bar.finish_and_clear();

@@ -155,6 +155,9 @@ struct PlanArgs {
     /// Do not open a Vulkan device: plan and estimate the memory only.
     #[arg(long, conflicts_with = "device")]
     no_device: bool,
+    /// List every buffer of the renderer's estimate, largest first (name and MiB).
+    #[arg(long)]
+    buffers: bool,
 }
 
 pub(crate) fn context(d: &DeviceArgs) -> Result<Context> {
@@ -402,7 +405,13 @@ fn plan_memory(scene: &hfgi::scene::model::Scene, a: &PlanArgs) -> Result<String
         mib(renderer.total()),
         mib(view.total())
     );
-    if let Some((name, b)) = renderer.largest() {
+    if a.buffers {
+        let mut all = renderer.buffers.clone();
+        all.sort_by(|x, y| y.1.cmp(&x.1).then_with(|| x.0.cmp(&y.0)));
+        for (name, b) in &all {
+            text += &format!("  {name:<32} {:>9.3} MiB\n", mib(*b));
+        }
+    } else if let Some((name, b)) = renderer.largest() {
         text += &format!("  largest buffer: {name} {:.2} MiB\n", mib(*b));
     }
     if a.no_device {

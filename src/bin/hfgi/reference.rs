@@ -107,24 +107,30 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
     };
     bar.finish_and_clear();
     eprintln!("reference took {:.2} s (wall clock)", started.elapsed().as_secs_f64());
-    let f32s = |v: &[[f64; 3]]| v.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect::<Vec<_>>();
-    let (total, direct, indirect) = (f32s(&out.total), f32s(&out.direct), f32s(&out.indirect));
-    let glossy = vec![[0f32; 3]; w * h];
     // Both outputs or neither (docs/robustness.md).
     hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
-        hfgi::io::exr::write_rgb_layers(
-            &a.shading_exr,
-            w,
-            h,
-            &[("", &total), ("direct", &direct), ("indirect", &indirect), ("glossy", &glossy)],
-        )?;
+        write_truth_exr(&a.shading_exr, &out)?;
         if let Some(p) = &a.shading_png {
-            hfgi::io::png::write_tonemapped(p, w, h, &total, exposure)?;
+            hfgi::io::png::write_tonemapped(p, w, h, &f32s(&out.total), exposure)?;
         }
         Ok(())
     })?;
     for p in std::iter::once(&a.shading_exr).chain(&a.shading_png) {
         eprintln!("wrote {}", p.display());
     }
+    Ok(())
+}
+
+fn f32s(v: &[[f64; 3]]) -> Vec<[f32; 3]> {
+    v.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect()
+}
+
+/// Writes a ground truth as `hfgi render --shading-exr` lays out its layers: total (R, G, B),
+/// direct, indirect and glossy (zero: the truth is diffuse), in f32.
+pub(crate) fn write_truth_exr(path: &Path, t: &TruthOutput) -> Result<()> {
+    let (total, direct, indirect) = (f32s(&t.total), f32s(&t.direct), f32s(&t.indirect));
+    let glossy = vec![[0f32; 3]; t.width * t.height];
+    let layers = [("", &total[..]), ("direct", &direct[..]), ("indirect", &indirect[..]), ("glossy", &glossy[..])];
+    hfgi::io::exr::write_rgb_layers(path, t.width, t.height, &layers)?;
     Ok(())
 }
