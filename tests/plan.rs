@@ -328,3 +328,28 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
     let text = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && text.contains("--frames 0") && !text.contains("panicked"), "{text}");
 }
+
+#[test]
+fn hfgi_plan_buffers_lists_every_buffer_of_the_estimate() {
+    // No device: the listing comes from hfgi::frame::memory::renderer, whose total it must sum to.
+    let args = ["plan", "--no-device", "--buffers", "--set", "heightfield.size=32", "--set", "gi.bounces=1"];
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi")).args(args).output().expect("run hfgi plan");
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    let listed: Vec<(&str, f64)> = text
+        .lines()
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            (f.len() == 3 && f[0].starts_with("hfgi.") && f[2] == "MiB").then(|| (f[0], f[1].parse().unwrap()))
+        })
+        .collect();
+    for name in ["hfgi.pyramid.levels", "hfgi.visibility.v", "hfgi.indirect.u", "hfgi.shade.output"] {
+        assert!(listed.iter().any(|(n, _)| *n == name), "{name} missing from\n{text}");
+    }
+    assert!(listed.windows(2).all(|w| w[0].1 >= w[1].1), "not largest first:\n{text}");
+    let total_line = text.lines().find(|l| l.starts_with("GPU memory:")).expect("total line");
+    let renderer: f64 = total_line.split("renderer ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let sum: f64 = listed.iter().map(|(_, m)| m).sum();
+    assert!((sum - renderer).abs() <= 0.001 * listed.len() as f64 + 0.01, "{sum} vs {renderer}\n{text}");
+    assert!(!text.contains("largest buffer"), "{text}");
+}

@@ -8,9 +8,10 @@ For every scene and preset, on the same fields and the same CPU:
   2. `hfgi export` writes the field for tools/mitsuba_check.py, which is then driven in-process
      (PeerRenderer: mesh refined --refine x per texel, stratified m x m samples per texel, Dr.Jit
      LLVM backend with --threads threads).
-  3. The direct layer: the smallest m on a ladder (about x1.2 per step) whose direct error against
-     the same reference is <= the preset's; then, with that direct layer, the smallest bounce m
-     whose indirect error is <= the preset's (and the total's too, else the direct m steps up).
+  3. The direct layer: the smallest m (a ladder of about x1.2 per step, then bisection between
+     its last failing and first passing steps) whose direct error against the same reference is
+     <= the preset's; then, with that direct layer, the smallest bounce m whose indirect error
+     is <= the preset's (and the total's too, else the direct m steps up).
   4. That configuration is timed afresh (warm: Dr.Jit's kernels are compiled by then): the mesh
      build (BVH included) + direct + indirect, median of 3 runs (1 when a run takes > 20 s).
   ratio = Mitsuba seconds / hfgi frame seconds; >= 1 means hfgi is at least as fast.
@@ -104,15 +105,29 @@ class Search:
         if e <= target:
             while i > 0 and ev(i - 1)[0] <= target:
                 i -= 1
-            return LADDER[i], ev(i)[0]
-        while True:
-            e, secs = ev(i)
-            if e <= target:
-                return LADDER[i], e
-            nxt = secs * (LADDER[i + 1] / LADDER[i]) ** 2 if i + 1 < len(LADDER) else math.inf
-            if nxt > self.max_seconds:
-                return None, e
-            i += 1
+        else:
+            while True:
+                e, secs = ev(i)
+                if e <= target:
+                    break
+                nxt = secs * (LADDER[i + 1] / LADDER[i]) ** 2 if i + 1 < len(LADDER) else math.inf
+                if nxt > self.max_seconds:
+                    return None, e
+                i += 1
+        # Bisection over the integers between the last failing ladder step and the passing one
+        # (the error falls with m, up to noise), so Mitsuba is charged no more than it needs.
+        lo, hi = (LADDER[i - 1] if i > 0 else 0), LADDER[i]
+        best = ev(i)[0]
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            t0 = time.time()
+            em = err_of(mid)
+            log(f"  {label} m={mid} ({mid * mid} spp): {100 * em:.3f}%, {time.time() - t0:.1f} s")
+            if em <= target:
+                hi, best = mid, em
+            else:
+                lo = mid
+        return hi, best
 
     def start(self, e_pilot, m_pilot, target):
         """A ladder start from a pilot error, assuming error ~ 1/m (1/sqrt(spp)); stratified
@@ -157,10 +172,10 @@ class Search:
             if m_b is None:
                 return None
             e = errors(direct, pr.indirect(direct, m_b * m_b, quiet=True), ref)
-            if e["total"] <= targets["total"] or m_d == LADDER[-1]:
+            if e["total"] <= targets["total"] or m_d >= LADDER[-1]:
                 return m_d, m_b, e
             log(f"  total {100 * e['total']:.3f}% > {100 * targets['total']:.3f}%: direct m steps up")
-            m_d = LADDER[LADDER.index(m_d) + 1]
+            m_d += 1
 
 
 def time_config(pr, export_dir, refine, threads, m_d, m_b):

@@ -95,6 +95,31 @@ pub(crate) fn buffer_sizes(
     .map(|(name, size)| (name, size.max(16)))
 }
 
+/// The scan's push constants at creation (per dispatch, `record_scan` sets the azimuth chunk,
+/// the probes and the dynamic flags); their modes are also its specialization constants.
+fn scan_push(scene: &Scene, (ww, wh): (u32, u32), sample_count: u32, rad: &RadiancePyramid) -> IndirectPush {
+    let gi = &scene.gi;
+    let k = scene.material.specular.unwrap_or([0.0; 3]);
+    IndirectPush {
+        work_width: ww,
+        work_height: wh,
+        wrap: scene.wrap as u32,
+        level_step: gi.level_step,
+        level_bias: gi.level_step * gi.level_offset,
+        texel_size: scene.texel_size as f32,
+        stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
+        sample_count,
+        radiance_levels: rad.pyramid.layout().count() as u32,
+        radiance_stack: (rad.pyramid.mode() == PyramidMode::Stack) as u32,
+        flags: super::shared::scan_flags(gi),
+        scan_extent: super::shared::scan_extent(gi),
+        specular: [k[0], k[1], k[2], 0.0],
+        sample_offset: 0,
+        probes: gi.radial_probes,
+        pad: [0; 2],
+    }
+}
+
 const U: usize = 3;
 const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
@@ -133,27 +158,7 @@ impl IndirectPass {
                     incident_bounce: &bufs[INCIDENT],
                 },
             )?);
-            let push = IndirectPush {
-                work_width: ww,
-                work_height: wh,
-                wrap: scene.wrap as u32,
-                level_step: gi.level_step,
-                level_bias: gi.level_step * gi.level_offset,
-                texel_size: scene.texel_size as f32,
-                stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
-                sample_count: samples.len() as u32,
-                radiance_levels: rad.pyramid.layout().count() as u32,
-                radiance_stack: (rad.pyramid.mode() == PyramidMode::Stack) as u32,
-                flags: super::shared::scan_flags(gi),
-                scan_extent: super::shared::scan_extent(gi),
-                specular: {
-                    let k = scene.material.specular.unwrap_or([0.0; 3]);
-                    [k[0], k[1], k[2], 0.0]
-                },
-                sample_offset: 0,
-                probes: gi.radial_probes,
-                pad: [0; 2],
-            };
+            let push = scan_push(scene, (ww, wh), samples.len() as u32, rad);
             // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
             let layout = pyramid.layout();
             let n_u = rad.pyramid.layout().count();
