@@ -237,9 +237,8 @@ fn outputs_that_cannot_work_are_rejected_before_any_work() {
     assert_eq!(left, ["h.f32", "scene.toml"], "nothing else is left in the folder");
 }
 
-/// `hfgi bench --timing`: every configuration of the grid at a tiny size, no references; the
-/// CSV has one row per configuration with a positive frame time and the device, the Markdown
-/// says how the times were taken.
+/// `hfgi bench --save-references --no-sh-visibility`: the SH-visibility columns are NaN and the
+/// saved exact reference is byte-identical to `hfgi reference`'s for the same settings.
 #[test]
 fn bench_saves_exact_references_and_skips_sh_visibility() {
     let dir = tempfile::tempdir().unwrap();
@@ -280,6 +279,9 @@ fn bench_saves_exact_references_and_skips_sh_visibility() {
     assert!(saved == std::fs::read(&cli).unwrap(), "bench's saved reference differs from `hfgi reference`");
 }
 
+/// `hfgi bench --timing`: every configuration of the grid at a tiny size, no references; the
+/// CSV has one row per configuration with a positive frame time and the device, the Markdown
+/// says how the times were taken.
 #[test]
 fn bench_timing_runs_the_grid_without_references() {
     let dir = tempfile::tempdir().unwrap();

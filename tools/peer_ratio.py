@@ -178,7 +178,7 @@ class Search:
             m_d += 1
 
 
-def time_config(pr, export_dir, refine, threads, m_d, m_b):
+def time_config(export_dir, refine, threads, m_d, m_b):
     """Seconds of a fresh mesh build + direct + indirect at (m_d, m_b): median of 3 (1 if slow)."""
     runs = []
     while len(runs) < 3:
@@ -195,8 +195,8 @@ def time_config(pr, export_dir, refine, threads, m_d, m_b):
     return runs[len(runs) // 2]
 
 
-def timed(pr, export_dir, args, m_d, m_b, e):
-    secs, setup, render, rays = time_config(pr, export_dir, args.refine, args.threads, m_d, m_b)
+def timed(export_dir, args, m_d, m_b, e):
+    secs, setup, render, rays = time_config(export_dir, args.refine, args.threads, m_d, m_b)
     return dict(m_d=m_d, m_b=m_b, errors=e, seconds=secs, setup=setup, render=render, rays=rays)
 
 
@@ -262,9 +262,9 @@ def main():
             res = {"scene": name, "preset": preset, "hfgi_ms": float(row["total_ms"]), "targets": targets,
                    "device": row["device"], "driver": row["driver"], "size": (pr.w, pr.h)}
             found = search.run(targets)
-            res["mitsuba"] = None if found is None else timed(pr, export_dir, args, found[0], found[1], found[2])
+            res["mitsuba"] = None if found is None else timed(export_dir, args, found[0], found[1], found[2])
             found = search.total_only(targets)
-            res["total_only"] = None if found is None else timed(pr, export_dir, args, found[0], found[0], found[1])
+            res["total_only"] = None if found is None else timed(export_dir, args, found[0], found[0], found[1])
             results.append(res)
             write_outputs(out, results, args, cmds, pr)
     log(f"wrote {out}/peer.md and {out}/peer.csv")

@@ -40,6 +40,9 @@ pub const FLAG_ACCUMULATE: u32 = 8;
 /// `HFGI_FLAG_MAX_BOUND`: the indirect scan skips the intervals and the far end that the max
 /// pyramid (stage `pyramid.max`) rules out.
 pub const FLAG_MAX_BOUND: u32 = 16;
+/// `HFGI_FLAG_SWEEP`: the visibility pass reads `ω_max` from the line sweep's horizons.
+pub const FLAG_SWEEP: u32 = 32;
+
 /// The flags that change between the dispatches of one pipeline (`HFGI_DYNAMIC_FLAGS`); every
 /// other bit is fixed when the pipeline is created and reaches the shader as a specialization
 /// constant too ([`static_modes`]).
@@ -54,8 +57,6 @@ pub const DYNAMIC_FLAGS: u32 = FLAG_ACCUMULATE | FLAG_MAX_BOUND;
 pub fn static_modes(first_id: u32, stack_mode: u32, wrap: u32, flags: u32) -> [(u32, u32); 3] {
     [(first_id, stack_mode), (first_id + 1, wrap), (first_id + 2, flags & !DYNAMIC_FLAGS)]
 }
-/// `HFGI_FLAG_SWEEP`: the visibility pass reads `ω_max` from the line sweep's horizons.
-pub const FLAG_SWEEP: u32 = 32;
 
 /// Loop iterations one invocation of the visibility pass may run per dispatch, counted as
 /// `ladder + n²·e` per azimuth (the scan, then the fold `A_j v_j`; `e` values per azimuth,

@@ -58,7 +58,8 @@ pub struct BenchArgs {
     #[arg(long, default_value = "out/bench")]
     pub(crate) out: PathBuf,
     /// Also write each exact reference to DIR/reference-<scene>-n<order>.exr (the layers of
-    /// `hfgi reference --shading-exr`, diffuse, `--bounces` bounces), e.g. for tools/peer-ratio.
+    /// `hfgi reference --shading-exr`, diffuse, with the most bounces any configuration uses),
+    /// e.g. for tools/peer_ratio.py.
     #[arg(long)]
     pub(crate) save_references: bool,
     /// Skip the SH-visibility reference (its error columns read "—"), which halves the
