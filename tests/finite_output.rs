@@ -112,6 +112,10 @@ fn animation_cases() -> Vec<(&'static str, &'static str, Vec<&'static str>, Vec<
         ("bumps", "amplitude", vec!["-1e3", "1e3"], vec!["1.1e3"]),
         ("bumps", "period", vec!["2", "4294967295"], vec!["1"]),
         ("bumps", "travel", vec!["0", "1"], vec!["-0.1", "1.1"]),
+        ("day", "day_frames", vec!["2", "100000"], vec!["1", "100001"]),
+        ("day", "max_elevation_deg", vec!["3", "90"], vec!["2.9", "90.1"]),
+        ("day", "sweep_deg", vec!["0", "360"], vec!["-1", "361"]),
+        ("day", "orbit_turns", vec!["-10", "10"], vec!["-10.1", "10.1"]),
     ]
 }
 
@@ -144,6 +148,14 @@ fn render_finite(ctx: &Context, scene: &Scene, what: &str) {
         Animation::Bumps(p) => {
             let b = MovingBumps::new(p.clone(), scene.field.clone(), scene.texel_size, scene.wrap).unwrap();
             r.update_heights(ctx, &b.heights_at(3).unwrap_or_else(|e| panic!("{what}: {e}"))).unwrap();
+            None
+        }
+        Animation::Day(p) => {
+            let day = hfgi::scene::day::DayCycle::new(p.clone(), scene).unwrap_or_else(|e| panic!("{what}: {e}"));
+            let f = day.frame(3, &scene.key_lights);
+            r.set_key_lights(&f.key_lights).unwrap_or_else(|e| panic!("{what}: {e}"));
+            r.set_environment(&f.environment).unwrap_or_else(|e| panic!("{what}: {e}"));
+            r.set_camera(&f.camera).unwrap_or_else(|e| panic!("{what}: {e}"));
             None
         }
         Animation::None => None,

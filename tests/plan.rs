@@ -67,7 +67,7 @@ fn check_frames(ctx: &Context, what: &str, scene: &Scene, changed: &[u64], expec
         if heights_changed && f > 0 {
             r.mark_heights_changed();
         }
-        let p = plan(scene, &FrameState { heights_changed, frame_index: f });
+        let p = plan(scene, &FrameState { heights_changed, frame_index: f, ..Default::default() });
         eprintln!("{what}, {p}");
         assert_eq!(p.names(), *want, "{what}: planned stages of frame {f}");
         assert_eq!(r.plan_next(), p, "{what}: Renderer::plan_next of frame {f} differs from plan()");
@@ -227,32 +227,54 @@ fn static_frames_keep_the_pyramid_and_amortise_the_shading() {
     let mut s = base();
     s.gi.bounces = 1;
     let full = frame_stages(&[PD, PS, VE, VK], true, 1, true);
-    let indirect = frame_stages(&[], false, 1, true);
-    let direct = vec![SD];
-    // Amortised: odd static frames the indirect light, even ones the direct; frame 4 has new
-    // heights and records everything again.
+    // Nothing changes after the first frame: static frames record nothing (amortised or not);
+    // frame 4 has new heights and records everything again.
     s.gi.amortize = true;
-    let plans = check_frames(
-        &ctx,
-        "amortised",
-        &s,
-        &[4],
-        &[full.clone(), indirect.clone(), direct.clone(), indirect.clone(), full.clone()],
-    );
-    assert!(reason(&plans[1], RG).contains("amortised: odd static frame"), "{}", plans[1]);
-    assert!(reason(&plans[2], SD).contains("amortised: even static frame"), "{}", plans[2]);
+    let plans = check_frames(&ctx, "amortised", &s, &[4], &[full.clone(), vec![], vec![], vec![], full.clone()]);
+    assert!(omitted(&plans[1], SD).contains("nothing changed since the last frame"), "{}", plans[1]);
     assert!(omitted(&plans[1], PD).contains("heights unchanged"), "{}", plans[1]);
     assert!(omitted(&plans[2], VE).contains("heights unchanged"), "{}", plans[2]);
     assert!(reason(&plans[4], PD).contains("heights changed since the last frame"), "{}", plans[4]);
-    // Not amortised: every static frame shades both, without rebuilding the pyramid.
     s.gi.amortize = false;
-    let both = frame_stages(&[], true, 1, true);
-    let plans = check_frames(&ctx, "not amortised", &s, &[], &[full, both.clone(), both]);
-    assert!(reason(&plans[1], SD).contains("gi.amortize = false"), "{}", plans[1]);
-    // No indirect light and amortised: odd static frames record nothing at all.
-    s.gi.amortize = true;
+    check_frames(&ctx, "not amortised", &s, &[], &[full, vec![], vec![]]);
     s.gi.bounces = 0;
-    check_frames(&ctx, "amortised, no bounces", &s, &[], &[vec![PD, PS, VE, VK, SD], vec![], vec![SD]]);
+    check_frames(&ctx, "no bounces", &s, &[], &[vec![PD, PS, VE, VK, SD], vec![], vec![]]);
+}
+
+#[test]
+fn live_changes_plan_what_they_leave_out_of_date() {
+    // Pure: the plan of a frame whose lights changed (tests/live.rs records them on the GPU).
+    use hfgi::frame::{Changes, Pending};
+    let mut s = base();
+    s.gi.bounces = 1;
+    let at = |f: u64, inputs: Pending| plan(&s, &FrameState { heights_changed: false, frame_index: f, inputs });
+    let both = Pending {
+        upload_bytes: 64,
+        direct: Changes::ENVIRONMENT,
+        indirect: Changes::ENVIRONMENT,
+        ..Default::default()
+    };
+    let indirect = frame_stages(&[], false, 1, true);
+    // Amortised: an even frame shades the direct light, an odd one the indirect light.
+    let even = at(2, both);
+    assert_eq!(even.names(), vec!["inputs.update", SD], "{even}");
+    assert!(reason(&even, SD).contains("environment changed; amortised: an even frame"), "{even}");
+    assert!(reason(&even, "inputs.update").contains("64 B"), "{even}");
+    let odd = at(3, both);
+    assert_eq!(odd.names(), [vec!["inputs.update"], indirect.clone()].concat(), "{odd}");
+    // One half out of date: that half, whatever the parity.
+    let only = Pending { indirect: Changes::DIRECT_LIGHT, ..Default::default() };
+    let p = at(2, only);
+    assert_eq!(p.names(), indirect, "{p}");
+    assert!(reason(&p, RG).contains("the direct light it reads"), "{p}");
+    // Moved key lights: their visibility, never the pyramid or the environment's.
+    let moved = Pending { key_lights_moved: true, ..both };
+    let p = at(2, moved);
+    assert_eq!(p.names(), vec!["inputs.update", VK, SD], "{p}");
+    assert!(omitted(&p, VE).contains("heights unchanged"), "{p}");
+    s.gi.amortize = false;
+    let p = plan(&s, &FrameState { heights_changed: false, frame_index: 3, inputs: moved });
+    assert_eq!(p.names(), [vec!["inputs.update", VK, SD], indirect].concat(), "{p}");
 }
 
 #[test]
@@ -300,10 +322,9 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
         "6. shade.direct             heights changed",
         "7. radiance.gather          gi.bounces = 1, bounce 1 of 1",
         "11. indirect.shade",
-        "frame 1 (heights unchanged): 5 stages",
-        "amortised: odd static frame shades the indirect light",
-        "frame 2 (heights unchanged): 1 stage",
-        "1. shade.direct             amortised: even static frame shades the direct light",
+        "frame 1 (heights unchanged): 0 stages",
+        "not recorded: nothing changed since the last frame: the shading is kept",
+        "frame 2 (heights unchanged): 0 stages",
         "not recorded: heights unchanged since the last frame",
         "resolved knobs: quality=default sh_order=4 azimuths=32 level_step=4",
         "level0=bilinear horizon=samples",

@@ -289,6 +289,14 @@ impl IndirectPass {
 
     /// Records stage `pyramid.max` if the scan uses the bound (nothing otherwise); after the
     /// heights' level 0 is written.
+    /// The live inputs' push fields (docs/integration.md §2): `f` edits the indirect shading's
+    /// push constants (camera, material) as the direct pass's; `specular` is the scan's
+    /// (the vector pyramid's glossy exit radiance).
+    pub(crate) fn update_pushes(&mut self, f: impl Fn(&mut ShadePush), specular: [f32; 3]) {
+        f(&mut self.shade_push);
+        self.push.specular = [specular[0], specular[1], specular[2], 0.0];
+    }
+
     pub fn record_max(&self, rec: &mut Recorder) {
         if let Some(m) = &self.max {
             m.record(rec);

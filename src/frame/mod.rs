@@ -3,6 +3,7 @@
 //! [`crate::reference`].
 
 pub mod indirect;
+pub mod live;
 pub mod memory;
 pub mod plan;
 pub mod pyramid;
@@ -17,5 +18,6 @@ pub mod view;
 pub mod visibility;
 pub mod water;
 
-pub use plan::{FrameState, Plan, PlannedPass, PlannedStage, Planner, Stage};
+pub use live::RendererOptions;
+pub use plan::{Changes, FrameState, Pending, Plan, PlannedPass, PlannedStage, Planner, Stage};
 pub use renderer::{Renderer, RendererStats, ShadingLayers};

@@ -17,8 +17,14 @@
 //!   `radiance.synthesize` (stack mode and scalar radiance pyramid only), `indirect.scan`,
 //!   `indirect.shade` — the indirect stages only with `gi.bounces > 0` and a surface that
 //!   reflects light (albedo or specular non-zero);
-//! - amortisation (docs/indirect.md §5): with `gi.amortize` and unchanged heights, even frames
-//!   record only `shade.direct`, odd frames only the indirect stages.
+//! - live inputs (`Renderer::set_environment`, `set_key_lights`, `set_material`,
+//!   `set_camera`; docs/integration.md §2): `inputs.update` first when a buffer must change;
+//!   moved or resized key lights re-run `visibility.key_lights` (never the pyramid or the
+//!   environment's visibility); the shading they leave out of date is re-shaded, and a frame
+//!   with nothing out of date records nothing;
+//! - amortisation (docs/indirect.md §5): with `gi.amortize` and unchanged heights, when both
+//!   the direct and the indirect light are out of date, even frames record only `shade.direct`,
+//!   odd frames only the indirect stages.
 
 use std::fmt;
 
@@ -31,9 +37,14 @@ use super::shade::STAGE_DIRECT;
 use super::visibility::{has_environment, STAGE_ENVIRONMENT, STAGE_KEY_LIGHTS};
 use crate::scene::model::{Albedo, GlossyPyramid, PyramidMode, Scene};
 
+/// Stage name of the live inputs' buffer updates ([`Stage::InputsUpdate`]).
+pub const STAGE_INPUTS: &str = "inputs.update";
+
 /// One stage of a frame; the indirect stages carry their bounce (1-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
+    /// `vkCmdUpdateBuffer` of the live inputs' new data (lights, material) into hfgi's buffers.
+    InputsUpdate,
     PyramidDecimate,
     PyramidSynthesize,
     PyramidMax,
@@ -51,6 +62,7 @@ impl Stage {
     /// The scope name the stage records (timestamps, debug labels, `Recorder::stages`).
     pub fn name(self) -> &'static str {
         match self {
+            Stage::InputsUpdate => STAGE_INPUTS,
             Stage::PyramidDecimate => STAGE_DECIMATE,
             Stage::PyramidSynthesize => STAGE_SYNTHESIZE,
             Stage::PyramidMax => STAGE_MAX,
@@ -67,24 +79,83 @@ impl Stage {
 }
 
 /// What the planner needs to know about the frame about to be recorded.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameState {
     /// The heights changed since the last recorded frame (true for the first frame).
     pub heights_changed: bool,
     /// Frames recorded before this one (0 for the first).
     pub frame_index: u64,
+    /// Live inputs changed since they were last used, and the shading they left out of date.
+    pub inputs: Pending,
 }
 
 impl FrameState {
     /// The first frame of a renderer: heights just uploaded.
     pub fn first() -> Self {
-        Self { heights_changed: true, frame_index: 0 }
+        Self { heights_changed: true, ..Self::default() }
     }
 
-    /// Frame `frame_index` of a static scene (the first frame has new heights).
+    /// Frame `frame_index` of a static scene (the first frame has new heights; nothing else
+    /// changes, so later frames record nothing).
     pub fn static_scene(frame_index: u64) -> Self {
-        Self { heights_changed: frame_index == 0, frame_index }
+        Self { heights_changed: frame_index == 0, frame_index, ..Self::default() }
     }
+}
+
+/// Which live inputs changed (bits; the reasons of a plan name them).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Changes(pub u8);
+
+impl Changes {
+    pub const NONE: Changes = Changes(0);
+    pub const ENVIRONMENT: Changes = Changes(1);
+    pub const KEY_LIGHTS: Changes = Changes(2);
+    pub const MATERIAL: Changes = Changes(4);
+    pub const CAMERA: Changes = Changes(8);
+    /// The direct light that the indirect bounces read was re-shaded after them (amortisation).
+    pub const DIRECT_LIGHT: Changes = Changes(16);
+    const NAMES: [&'static str; 5] = ["environment", "key lights", "material", "camera", "the direct light it reads"];
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    pub fn contains(self, other: Changes) -> bool {
+        self.0 & other.0 == other.0
+    }
+
+    /// The changed inputs, comma-separated (`"environment, camera"`).
+    pub fn describe(self) -> String {
+        let names = Self::NAMES.iter().enumerate().filter(|(i, _)| self.0 & (1 << i) != 0);
+        names.map(|(_, n)| *n).collect::<Vec<_>>().join(", ")
+    }
+}
+
+impl std::ops::BitOr for Changes {
+    type Output = Changes;
+    fn bitor(self, o: Changes) -> Changes {
+        Changes(self.0 | o.0)
+    }
+}
+
+impl std::ops::BitOrAssign for Changes {
+    fn bitor_assign(&mut self, o: Changes) {
+        self.0 |= o.0;
+    }
+}
+
+/// The live inputs' work a frame has to do ([`crate::frame::Renderer`] keeps it between
+/// frames; docs/plan.md §1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Pending {
+    /// Bytes `inputs.update` copies into hfgi's buffers (0: no such stage).
+    pub upload_bytes: u64,
+    /// Key lights moved or resized since their visibility was computed.
+    pub key_lights_moved: bool,
+    /// Why the direct shading is out of date (empty: up to date).
+    pub direct: Changes,
+    /// Why the indirect shading is out of date (empty: up to date).
+    pub indirect: Changes,
 }
 
 /// A stage the frame records, or one it leaves out, with the reason.
@@ -354,7 +425,13 @@ impl Planner {
             list.push(PlannedStage { stage, name: stage.name(), reason })
         };
         let changed = frame.heights_changed;
-        let odd = frame.frame_index % 2 == 1;
+        let pend = frame.inputs;
+        if pend.upload_bytes > 0 {
+            let what = (pend.direct | pend.indirect).describe();
+            let what = if what.is_empty() { "live inputs".to_string() } else { what };
+            let r = format!("{what} changed: {} B into hfgi's buffers (vkCmdUpdateBuffer)", pend.upload_bytes);
+            add(&mut stages, Stage::InputsUpdate, r);
+        }
         // 1. Heights: pyramid and visibility, only when the heights changed.
         if changed {
             let why = if frame.frame_index == 0 {
@@ -421,32 +498,20 @@ impl Planner {
             if self.environment {
                 add(&mut omitted, Stage::VisibilityEnvironment, why.into());
             }
-            if self.key_lights > 0 {
+            if self.key_lights > 0 && pend.key_lights_moved {
+                let r = "key lights moved or resized: their visibility is recomputed (heights unchanged)";
+                add(&mut stages, Stage::VisibilityKeyLights, r.into());
+            } else if self.key_lights > 0 {
                 add(&mut omitted, Stage::VisibilityKeyLights, why.into());
             }
         }
         // 2. Direct shading and 3. the bounces, amortised over static frames (§7).
         let no_indirect = self.no_indirect();
-        let (direct, indirect, when) = if changed && no_indirect.is_some() {
-            (true, true, "heights changed: the direct light is shaded")
-        } else if changed {
-            (true, true, "heights changed: direct and indirect light both shaded")
-        } else if !self.amortize && no_indirect.is_some() {
-            (true, true, "gi.amortize = false: every frame shades the direct light")
-        } else if !self.amortize {
-            (true, true, "gi.amortize = false: every frame shades direct and indirect light")
-        } else if odd {
-            (false, true, "amortised: odd static frame shades the indirect light")
-        } else {
-            (true, false, "amortised: even static frame shades the direct light")
-        };
+        let (direct, indirect, when) = self.shading(frame, no_indirect.is_none());
         if direct {
-            add(&mut stages, Stage::ShadeDirect, when.into());
-        } else if no_indirect.is_some() {
-            let r = "amortised: odd static frame shades the indirect light, and there is none (the shading is kept)";
-            add(&mut omitted, Stage::ShadeDirect, r.into());
+            add(&mut stages, Stage::ShadeDirect, when.clone());
         } else {
-            add(&mut omitted, Stage::ShadeDirect, format!("{when} only"));
+            add(&mut omitted, Stage::ShadeDirect, when.clone());
         }
         let synthesize = !self.vector && self.mode == PyramidMode::Stack;
         let indirect_stages = [
@@ -462,7 +527,7 @@ impl Planner {
             }
         } else if !indirect {
             for s in indirect_stages.into_iter().filter(|s| synthesize || *s != Stage::RadianceSynthesize(0)) {
-                add(&mut omitted, s, format!("{when} only"));
+                add(&mut omitted, s, when.clone());
             }
         } else {
             let n = self.bounces;
@@ -494,6 +559,37 @@ impl Planner {
             }
         }
         Plan { frame: *frame, stages, omitted, passes: self.passes() }
+    }
+
+    /// Whether the frame shades the direct light and the indirect light, and why (docs/plan.md
+    /// §1): everything after new heights; otherwise what the live inputs left out of date,
+    /// amortised (even frames direct, odd frames indirect) when both are.
+    fn shading(&self, frame: &FrameState, has_indirect: bool) -> (bool, bool, String) {
+        let pend = frame.inputs;
+        let (d, i) = (!pend.direct.is_empty(), has_indirect && !pend.indirect.is_empty());
+        if frame.heights_changed {
+            let r = if has_indirect { "direct and indirect light both shaded" } else { "the direct light is shaded" };
+            return (true, true, format!("heights changed: {r}"));
+        }
+        if !d && !i {
+            return (false, false, "nothing changed since the last frame: the shading is kept".into());
+        }
+        if self.amortize && d && i {
+            let what = (pend.direct | pend.indirect).describe();
+            return if frame.frame_index % 2 == 1 {
+                (false, true, format!("{what} changed; amortised: an odd frame shades the indirect light"))
+            } else {
+                (true, false, format!("{what} changed; amortised: an even frame shades the direct light"))
+            };
+        }
+        let mut why = Vec::new();
+        if d {
+            why.push(format!("direct light out of date ({} changed)", pend.direct.describe()));
+        }
+        if i {
+            why.push(format!("indirect light out of date ({} changed)", pend.indirect.describe()));
+        }
+        (d, i, why.join("; "))
     }
 }
 

@@ -7,6 +7,7 @@
 //! [`ShadePass`] (see its docs for the layout). Intermediates are private.
 
 use super::indirect::IndirectPass;
+use super::live::{self, Live, RendererOptions};
 use super::plan::{FrameState, Plan, Planner, Stage};
 use super::pyramid::HeightPyramid;
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
@@ -50,11 +51,20 @@ pub struct Renderer {
     planner: Planner,
     heights_changed: bool,
     stats: RendererStats,
+    /// The live inputs (`set_environment`, …; src/frame/live.rs).
+    pub(super) live: Live,
 }
 
 impl Renderer {
     /// Validates the settings, creates every pass and uploads the heights.
     pub fn new(ctx: &Context, scene: &Scene) -> Result<Self> {
+        Self::with_options(ctx, scene, &RendererOptions::default())
+    }
+
+    /// [`Renderer::new`] with creation options (e.g. more key-light slots than the scene has,
+    /// for [`Renderer::set_key_lights`]).
+    pub fn with_options(ctx: &Context, scene: &Scene, options: &RendererOptions) -> Result<Self> {
+        let scene = &live::with_slots(scene, options)?;
         scene.gi.validate()?;
         scene.check_limits()?;
         let (w, h) = (scene.field.width(), scene.field.height());
@@ -101,6 +111,7 @@ impl Renderer {
             planner,
             heights_changed: true,
             stats: RendererStats::default(),
+            live: Live::new(scene.clone()),
         })
     }
 
@@ -124,16 +135,22 @@ impl Renderer {
         self.stats.frames += 1;
         self.stats.pyramid_builds += plan.rebuilds_pyramid() as u64;
         self.heights_changed = false;
+        self.live.recorded(&plan.stages.iter().map(|s| s.stage).collect::<Vec<_>>());
     }
 
     /// The plan of the frame the next [`Renderer::record`] records (docs/plan.md).
     pub fn plan_next(&self) -> Plan {
-        self.planner.plan(&FrameState { heights_changed: self.heights_changed, frame_index: self.stats.frames })
+        self.planner.plan(&FrameState {
+            heights_changed: self.heights_changed,
+            frame_index: self.stats.frames,
+            inputs: self.live.pending,
+        })
     }
 
     fn record_stage(&self, rec: &mut Recorder, stage: Stage) {
         let ind = self.indirect.as_ref();
         match stage {
+            Stage::InputsUpdate => live::record_updates(&self.live, rec),
             Stage::PyramidDecimate => self.pyramid.record_decimate(rec),
             Stage::PyramidSynthesize => self.pyramid.record_synthesize(rec),
             Stage::PyramidMax => ind.into_iter().for_each(|i| i.record_max(rec)),

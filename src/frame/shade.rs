@@ -102,14 +102,45 @@ pub(crate) struct ShadeData {
     consts: Vec<u32>,
 }
 
+/// The `hfgi.shade.light` data of `sets` (in buffer order): each set's `n²` RGB lighting
+/// ([`set_lighting`]) as `vec4`s.
+pub(crate) fn light_data(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Vec<[f32; 4]> {
+    sets.iter()
+        .flat_map(|(k, set)| set_lighting(scene, *k, set))
+        .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
+        .collect()
+}
+
+impl ShadePush {
+    /// The shading camera (glossy view vector), as a high and a low f32 (docs/hard-cases.md):
+    /// the shader forms (camera − P) + camera_lo, exact to f32 of the result even for heights
+    /// near 1e7.
+    pub(crate) fn set_camera(&mut self, position: glam::DVec3) {
+        let cam = position.to_array();
+        let hi = cam.map(|v| v as f32);
+        let lo = [0, 1, 2].map(|i| (cam[i] - hi[i] as f64) as f32);
+        self.camera = [hi[0], hi[1], hi[2], 0.0];
+        self.camera_lo = [lo[0], lo[1], lo[2], 0.0];
+    }
+
+    /// The material's push fields: constant albedo (or the map flag), specular and its switch.
+    pub(crate) fn set_material(&mut self, m: &crate::scene::model::Material) {
+        let (albedo_map, albedo) = match &m.albedo {
+            Albedo::Map(_) => (1, [0.0; 4]),
+            Albedo::Constant(a) => (0, [a[0], a[1], a[2], 0.0]),
+        };
+        let spec = m.specular.unwrap_or([0.0; 3]);
+        self.albedo_map = albedo_map;
+        self.albedo = albedo;
+        self.glossy = m.specular.is_some() as u32;
+        self.specular = [spec[0], spec[1], spec[2], 0.0];
+    }
+}
+
 impl ShadeData {
     pub(crate) fn new(scene: &Scene) -> Self {
         let n = scene.gi.sh_order;
-        let light: Vec<[f32; 4]> = light_sets(scene)
-            .iter()
-            .flat_map(|(k, set)| set_lighting(scene, *k, set))
-            .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
-            .collect();
+        let light = light_data(scene, &light_sets(scene));
         let t = triple::triple(n);
         let entries: Vec<[u32; 2]> = t
             .entries
@@ -255,33 +286,18 @@ impl ShadePass {
         let incident = bufs.pop().expect("incident");
         let output = bufs.pop().expect("output");
         let (ww, wh) = pyramid.work();
-        // The camera position as a high and a low f32 (docs/hard-cases.md): the shader forms
-        // (camera − P) + camera_lo, exact to f32 of the result even for heights near 1e7.
-        let cam = scene.camera.position.to_array();
-        let cam_hi = cam.map(|v| v as f32);
-        let cam_lo = [0, 1, 2].map(|i| (cam[i] - cam_hi[i] as f64) as f32);
-        let (albedo_map, albedo) = match &scene.material.albedo {
-            Albedo::Map(_) => (1, [0.0; 4]),
-            Albedo::Constant(a) => (0, [a[0], a[1], a[2], 0.0]),
-        };
-        let spec = scene.material.specular.unwrap_or([0.0; 3]);
-        let push = ShadePush {
+        let mut push = ShadePush {
             width: w as u32,
             height: h as u32,
             work_width: ww,
             work_height: wh,
             set_count: vis.set_count() as u32,
             wrap: scene.wrap as u32,
-            glossy: scene.material.specular.is_some() as u32,
-            albedo_map,
             texel_size: scene.texel_size as f32,
-            accumulate: 0,
-            pad: [0.0; 2],
-            camera: [cam_hi[0], cam_hi[1], cam_hi[2], 0.0],
-            specular: [spec[0], spec[1], spec[2], 0.0],
-            albedo,
-            camera_lo: [cam_lo[0], cam_lo[1], cam_lo[2], 0.0],
+            ..Default::default()
         };
+        push.set_camera(scene.camera.position);
+        push.set_material(&scene.material);
         Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push })
     }
 
@@ -313,6 +329,11 @@ impl ShadePass {
     /// The push constants of the direct mode.
     pub fn push(&self) -> ShadePush {
         self.push
+    }
+
+    /// The push constants of the direct mode, for the live inputs (docs/integration.md §2).
+    pub(crate) fn push_mut(&mut self) -> &mut ShadePush {
+        &mut self.push
     }
 
     /// Reads layer `layer` back as RGB (waits).

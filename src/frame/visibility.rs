@@ -64,9 +64,14 @@ pub(crate) struct VisibilityData {
 
 impl VisibilityData {
     pub(crate) fn new(scene: &Scene) -> Self {
+        Self::for_sets(scene, &light_sets(scene))
+    }
+
+    /// The data of `sets` only (in buffer order), e.g. the key lights' sets after they moved.
+    pub(crate) fn for_sets(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Self {
         let n = scene.gi.sh_order;
         let mut data = Self { samples: Vec::new(), fold: Vec::new(), sets: Vec::new() };
-        for (kind, set) in &light_sets(scene) {
+        for (kind, set) in sets {
             let first = data.samples.len() as u32;
             for &phi in &set.phi {
                 data.samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
@@ -119,6 +124,8 @@ pub struct VisibilityPass {
     push: VisibilityPush,
     /// Loop iterations per azimuth (ladder + n²·e; n²·e with the sweep), for the azimuth chunks.
     loop_cost: u32,
+    /// Where the key lights' sets begin: in the samples (index) and in the fold (floats).
+    key_offsets: (u64, u64),
     /// `gi.visibility = "sweep"`: the line sweep feeding the horizons.
     sweep: Option<SweepPass>,
 }
@@ -131,6 +138,8 @@ impl VisibilityPass {
         let n2 = n * n;
         let (ww, wh) = pyramid.work();
         let VisibilityData { samples, fold, sets } = VisibilityData::new(scene);
+        let env = sets.iter().filter(|s| s.kind == SetKind::Environment).map(|s| s.count as u64).sum::<u64>();
+        let key_offsets = (env, env * (fold.len() as u64) / (samples.len().max(1) as u64));
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -225,7 +234,20 @@ impl VisibilityPass {
                 crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
             } + n2 * elevation::gpu_size(scene.gi.elevation_basis, n)) as u32,
             sweep,
+            key_offsets,
         })
+    }
+
+    /// The samples and fold of the key lights' sets as `(buffer, byte offset, bytes)` for
+    /// `vkCmdUpdateBuffer` (the live inputs, docs/integration.md §2); `data` holds those sets
+    /// only ([`VisibilityData::for_sets`]), as many as at creation.
+    pub(crate) fn key_light_updates(&self, data: &VisibilityData) -> [(vk::Buffer, u64, Vec<u8>); 2] {
+        let keys = self.sets.iter().filter(|s| s.kind != SetKind::Environment).map(|s| s.count as usize).sum::<usize>();
+        debug_assert_eq!(data.samples.len(), keys, "key-light samples");
+        [
+            (self.samples.raw, self.key_offsets.0 * 16, bytemuck::cast_slice(&data.samples).to_vec()),
+            (self.fold.raw, self.key_offsets.1 * 4, bytemuck::cast_slice(&data.fold).to_vec()),
+        ]
     }
 
     /// Records one dispatch per light set, inside the stage scopes.

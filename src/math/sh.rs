@@ -140,6 +140,23 @@ pub fn reconstruct(n: usize, c: &[f64], d: [f64; 3]) -> f64 {
     eval(n, d).iter().zip(c).map(|(y, c)| y * c).sum()
 }
 
+/// The coefficients of `f(R⁻¹ω)` for `f = Σ c_k y_k` of order `n`: the expansion rotated by
+/// the rotation matrix `r` (row-major, orthonormal), so that what `f` had in direction `d` the
+/// result has in direction `R·d`. A rotation keeps each band, so projecting the rotated
+/// expansion with [`project`] at `n` Gauss–Legendre nodes (exact for the product of two
+/// order-`n` expansions) is exact to rounding. `Environment::rotated` uses it for a rotating
+/// sky (an environment map rotates the same way: its SH projection commutes with rotation).
+///
+/// # Panics
+/// If `n ∉ 1..=16` or `c.len() < n²` (programmer errors).
+pub fn rotate(n: usize, c: &[f64], r: [[f64; 3]; 3]) -> Vec<f64> {
+    check_order(n);
+    assert!(c.len() >= n * n, "rotate: need {} coefficients, got {}", n * n, c.len());
+    // R⁻¹ = Rᵀ for a rotation: (Rᵀd)_i = Σ_j r[j][i] d_j.
+    let inv = |d: [f64; 3]| [0, 1, 2].map(|i| r[0][i] * d[0] + r[1][i] * d[1] + r[2][i] * d[2]);
+    project(n, |d| reconstruct(n, c, inv(d)), n.max(1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,6 +177,33 @@ mod tests {
         let b = eval(6, [3.0 * t.sin() * p.cos(), 3.0 * t.sin() * p.sin(), 3.0 * t.cos()]);
         for (x, y) in a.iter().zip(&b) {
             assert!((x - y).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn rotate_matches_rotate_z_and_moves_values_with_the_directions() {
+        let n = 5;
+        let c: Vec<f64> = (0..n * n).map(|k| ((k * 37 % 11) as f64 - 5.0) / 7.0).collect();
+        let a = 0.83f64;
+        let rz = [[a.cos(), -a.sin(), 0.0], [a.sin(), a.cos(), 0.0], [0.0, 0.0, 1.0]];
+        for (x, y) in rotate(n, &c, rz).iter().zip(rotate_z(n, &c, a)) {
+            assert!((x - y).abs() < 1e-12, "{x} vs {y}");
+        }
+        // A rotation about an oblique axis (Rodrigues): f'(R·d) = f(d).
+        let (u, t) = ([0.36f64, -0.48, 0.8], 1.9f64);
+        let (s, co) = t.sin_cos();
+        let k = [[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]];
+        let r: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let kk: f64 = (0..3).map(|m| k[i][m] * k[m][j]).sum();
+                f64::from(u8::from(i == j)) + s * k[i][j] + (1.0 - co) * kk
+            })
+        });
+        let rot = rotate(n, &c, r);
+        for d in [[0.3, 0.2, 0.9], [-0.7, 0.1, -0.2], [0.0, -1.0, 0.05]] {
+            let rd = [0, 1, 2].map(|i| r[i][0] * d[0] + r[i][1] * d[1] + r[i][2] * d[2]);
+            let (x, y) = (reconstruct(n, &rot, rd), reconstruct(n, &c, d));
+            assert!((x - y).abs() < 1e-12, "{x} vs {y}");
         }
     }
 }

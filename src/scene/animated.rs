@@ -41,15 +41,19 @@ pub enum Animation {
     Water(WaterParams),
     /// Bumps moving over the scene's height field, evaluated on the CPU each frame.
     Bumps(BumpParams),
+    /// A day: the sun moves, the sky follows, the camera orbits; the heights stay
+    /// (`crate::scene::day`).
+    Day(crate::scene::day::DayParams),
 }
 
 impl Animation {
-    /// `none`, `water` or `bumps` (the `animation.kind` value).
+    /// `none`, `water`, `bumps` or `day` (the `animation.kind` value).
     pub fn kind(&self) -> &'static str {
         match self {
             Animation::None => "none",
             Animation::Water(_) => "water",
             Animation::Bumps(_) => "bumps",
+            Animation::Day(_) => "day",
         }
     }
 }

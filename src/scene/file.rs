@@ -323,6 +323,11 @@ struct RawAnimation {
     period: Option<u32>,
     travel: Option<f64>,
     shape: Option<String>,
+    // day
+    day_frames: Option<u32>,
+    max_elevation_deg: Option<f64>,
+    sweep_deg: Option<f64>,
+    orbit_turns: Option<f64>,
 }
 
 /// `n` (square) or `[w, h]`.
@@ -1051,16 +1056,21 @@ impl Ctx<'_> {
             "drop_radius",
         ];
         const BUMPS: &[&str] = &["count", "radius", "amplitude", "period", "travel", "shape"];
+        const DAY: &[&str] = &["day_frames", "max_elevation_deg", "sweep_deg", "orbit_turns"];
+        let kinds: [(&str, &[&str]); 3] = [("water", WATER), ("bumps", BUMPS), ("day", DAY)];
         let Some(t) = t else { return Ok(Animation::None) };
         let raw: RawAnimation = self.de_table(t, "animation")?;
         let kind = raw.kind.as_deref().unwrap_or("none");
-        let (own, other, other_kind): (&[&str], &[&str], &str) = match kind {
-            "none" => return Ok(Animation::None),
-            "water" => (WATER, BUMPS, "bumps"),
-            "bumps" => (BUMPS, WATER, "water"),
-            _ => return Err(self.invalid("animation.kind", format!("{kind:?}"), "\"none\", \"water\" or \"bumps\"")),
+        let own = match kinds.iter().find(|(k, _)| *k == kind) {
+            _ if kind == "none" => return Ok(Animation::None),
+            Some((_, own)) => *own,
+            None => {
+                let want = "\"none\", \"water\", \"bumps\" or \"day\"";
+                return Err(self.invalid("animation.kind", format!("{kind:?}"), want));
+            }
         };
-        if let Some(k) = t.keys().find(|k| other.contains(&k.as_str())) {
+        let other = |k: &str| kinds.iter().find(|(n, keys)| *n != kind && keys.contains(&k)).map(|(n, _)| *n);
+        if let Some((k, other_kind)) = t.keys().find_map(|k| other(k).map(|o| (k, o))) {
             let key = format!("animation.{k}");
             return Err(self.err(
                 Some(&key),
@@ -1089,6 +1099,16 @@ impl Ctx<'_> {
             };
             p.validate().map_err(check)?;
             Ok(Animation::Water(p))
+        } else if kind == "day" {
+            let d = crate::scene::day::DayParams::default();
+            let p = crate::scene::day::DayParams {
+                day_frames: raw.day_frames.unwrap_or(d.day_frames),
+                max_elevation_deg: raw.max_elevation_deg.unwrap_or(d.max_elevation_deg),
+                sweep_deg: raw.sweep_deg.unwrap_or(d.sweep_deg),
+                orbit_turns: raw.orbit_turns.unwrap_or(d.orbit_turns),
+            };
+            p.validate().map_err(check)?;
+            Ok(Animation::Day(p))
         } else {
             let d = BumpParams::default();
             let p = BumpParams {

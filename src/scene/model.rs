@@ -523,6 +523,115 @@ pub mod limits {
     }
 }
 
+fn within(v: f64, lo: f64, hi: f64) -> bool {
+    v.is_finite() && v >= lo && v <= hi
+}
+
+impl Environment {
+    /// The environment rotated by `r` (row-major rotation matrix): the radiance it had in
+    /// direction `d` arrives from `R·d` (exact per SH band, [`crate::math::sh::rotate`]);
+    /// order `n` = the coefficients given, rounded down to a square.
+    pub fn rotated(&self, r: [[f64; 3]; 3]) -> Environment {
+        let n = (self.sh.len() as f64).sqrt().floor() as usize;
+        if n == 0 {
+            return self.clone();
+        }
+        let per: Vec<Vec<f64>> =
+            (0..3).map(|c| crate::math::sh::rotate(n, &self.sh.iter().map(|v| v[c]).collect::<Vec<_>>(), r)).collect();
+        Environment { sh: (0..n * n).map(|k| [per[0][k], per[1][k], per[2][k]]).collect() }
+    }
+
+    /// The environment times `intensity` (every coefficient).
+    pub fn scaled(&self, intensity: f64) -> Environment {
+        Environment { sh: self.sh.iter().map(|c| c.map(|v| v * intensity)).collect() }
+    }
+
+    /// Every coefficient within ±[`limits::MAX_RADIANCE`] (also for live changes,
+    /// `Renderer::set_environment`).
+    pub fn check(&self) -> Result<()> {
+        let m = limits::MAX_RADIANCE;
+        if let Some(k) = self.sh.iter().position(|c| !c.iter().all(|v| within(*v, -m, m))) {
+            return Err(Error::param(
+                format!("environment SH coefficient {k}"),
+                format!("{:?}", self.sh[k]),
+                format!("each within ±{m:e}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl KeyLight {
+    /// Key light `k`: radiance in [0, [`limits::MAX_RADIANCE`]], a finite non-zero direction,
+    /// an angular radius within [`limits::ANGULAR_RADIUS_DEG`].
+    pub fn check(&self, k: usize) -> Result<()> {
+        let m = limits::MAX_RADIANCE;
+        if !self.radiance.iter().all(|v| within(*v, 0.0, m)) {
+            return Err(Error::param(
+                format!("key light {k} radiance"),
+                format!("{:?}", self.radiance),
+                format!("each in [0, {m:e}]"),
+            ));
+        }
+        let d = self.direction;
+        if !(d.is_finite() && d.length() > 1e-12) {
+            return Err(Error::param(
+                format!("key light {k} direction"),
+                format!("{d:?}"),
+                "a finite, non-zero vector",
+            ));
+        }
+        let (lo, hi) = limits::ANGULAR_RADIUS_DEG;
+        if !within(self.angular_radius, lo.to_radians() * (1.0 - 1e-12), hi.to_radians() * (1.0 + 1e-12)) {
+            return Err(Error::param(
+                format!("key light {k} angular radius"),
+                format!("{}°", self.angular_radius.to_degrees()),
+                format!("a number in [{lo}, {hi}] degrees"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Material {
+    /// The Phong exponent within [`limits::EXPONENT`], specular within [0,
+    /// [`limits::MAX_SPECULAR`]], a constant albedo finite and ≥ 0.
+    pub fn check(&self) -> Result<()> {
+        let (elo, ehi) = limits::EXPONENT;
+        if !within(f64::from(self.exponent), elo, ehi) {
+            return Err(Error::param("material exponent", self.exponent, format!("a number in [{elo}, {ehi}]")));
+        }
+        if let Some(sp) = self.specular {
+            if !sp.iter().all(|v| within(f64::from(*v), 0.0, limits::MAX_SPECULAR)) {
+                return Err(Error::param(
+                    "material specular",
+                    format!("{sp:?}"),
+                    format!("each in [0, {:e}]", limits::MAX_SPECULAR),
+                ));
+            }
+        }
+        if let Albedo::Constant(a) = self.albedo {
+            if !a.iter().all(|v| within(f64::from(*v), 0.0, f64::from(f32::MAX))) {
+                return Err(Error::param("material albedo", format!("{a:?}"), "finite, each ≥ 0"));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Camera {
+    /// Position and target within ±[`limits::MAX_COORDINATE`].
+    pub fn check(&self) -> Result<()> {
+        let c = limits::MAX_COORDINATE;
+        for (name, v) in [("camera position", self.position), ("camera target", self.target)] {
+            if !v.to_array().iter().all(|x| within(*x, -c, c)) {
+                return Err(Error::param(name, format!("{v:?}"), format!("each coordinate within ±{c:e}")));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A complete, validated scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -548,49 +657,15 @@ impl Scene {
     pub fn check_limits(&self) -> Result<()> {
         limits::check_heights(&self.field)?;
         let (lo, hi) = limits::TEXEL_SIZE;
-        let within = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
         if !within(self.texel_size, lo, hi) {
             return Err(Error::param("texel_size", self.texel_size, format!("a number in [{lo:e}, {hi:e}]")));
         }
-        let m = limits::MAX_RADIANCE;
-        let rgb_ok = |c: &[f64; 3], lo: f64, hi: f64| c.iter().all(|v| within(*v, lo, hi));
-        if let Some(k) = self.environment.sh.iter().position(|c| !rgb_ok(c, -m, m)) {
-            return Err(Error::param(
-                format!("environment SH coefficient {k}"),
-                format!("{:?}", self.environment.sh[k]),
-                format!("each within ±{m:e}"),
-            ));
+        self.environment.check()?;
+        for (k, l) in self.key_lights.iter().enumerate() {
+            l.check(k)?;
         }
-        if let Some(k) = self.key_lights.iter().position(|l| !rgb_ok(&l.radiance, 0.0, m)) {
-            return Err(Error::param(
-                format!("key light {k} radiance"),
-                format!("{:?}", self.key_lights[k].radiance),
-                format!("each in [0, {m:e}]"),
-            ));
-        }
-        let (elo, ehi) = limits::EXPONENT;
-        if !within(f64::from(self.material.exponent), elo, ehi) {
-            return Err(Error::param(
-                "material exponent",
-                self.material.exponent,
-                format!("a number in [{elo}, {ehi}]"),
-            ));
-        }
-        if let Some(sp) = self.material.specular {
-            if !sp.iter().all(|v| within(f64::from(*v), 0.0, limits::MAX_SPECULAR)) {
-                return Err(Error::param(
-                    "material specular",
-                    format!("{sp:?}"),
-                    format!("each in [0, {:e}]", limits::MAX_SPECULAR),
-                ));
-            }
-        }
-        let c = limits::MAX_COORDINATE;
-        for (name, v) in [("camera position", self.camera.position), ("camera target", self.camera.target)] {
-            if !v.to_array().iter().all(|x| within(*x, -c, c)) {
-                return Err(Error::param(name, format!("{v:?}"), format!("each coordinate within ±{c:e}")));
-            }
-        }
+        self.material.check()?;
+        self.camera.check()?;
         check_sweep(self.wrap, &self.gi)
     }
 }

@@ -45,6 +45,31 @@ pub fn transfer_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
     );
 }
 
+/// Before transfer writes into buffers that compute shaders read (`vkCmdUpdateBuffer` of the
+/// live inputs): earlier compute-shader reads and transfers, in this or an earlier submission
+/// to the queue, finish first (write-after-read; write-after-write of an earlier update).
+pub fn compute_to_update(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (
+            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        ),
+        (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE),
+    );
+}
+
+/// Transfer writes of any transfer command (copy, fill, update) → compute shader reads.
+pub fn update_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE),
+        (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ),
+    );
+}
+
 /// Compute shader writes → transfer reads (downloads).
 pub fn compute_to_transfer(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(

@@ -79,6 +79,7 @@ pub struct Context {
     info: DeviceInfo,
     submit: Mutex<Option<(vk::CommandPool, vk::Fence)>>,
     pipelines_created: std::sync::atomic::AtomicU64,
+    submits: std::sync::atomic::AtomicU64,
 }
 
 unsafe extern "system" fn on_message(
@@ -246,6 +247,7 @@ impl Context {
         let info = Self::describe(&instance, physical, family);
         Ok(Self {
             pipelines_created: Default::default(),
+            submits: Default::default(),
             entry,
             instance,
             physical,
@@ -280,6 +282,7 @@ impl Context {
         let info = Self::describe(&raw.instance, raw.physical_device, raw.queue_family_index);
         Ok(Self {
             pipelines_created: Default::default(),
+            submits: Default::default(),
             entry: raw.entry,
             instance: raw.instance,
             physical: raw.physical_device,
@@ -422,6 +425,13 @@ impl Context {
     pub fn allocator(&self) -> &Arc<Mutex<Allocator>> {
         &self.allocator
     }
+    /// Queue submissions hfgi has made on this context ([`Context::submit_and_wait`] is its only
+    /// `vkQueueSubmit2`): an embedder compares it before and after its frames to check that
+    /// hfgi did no queue work of its own (docs/integration.md).
+    pub fn submit_count(&self) -> u64 {
+        self.submits.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// Pipelines (compute and graphics) hfgi has created on this context so far: a per-frame
     /// loop that re-created pipelines would show here.
     pub fn pipelines_created(&self) -> u64 {
@@ -500,6 +510,7 @@ impl Context {
             let cbi = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
             let submit = [vk::SubmitInfo2::default().command_buffer_infos(&cbi)];
             unsafe { self.device.reset_fences(&[fence]) }.vk("vkResetFences")?;
+            self.submits.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             unsafe { self.device.queue_submit2(self.queue, &submit, fence) }.vk("vkQueueSubmit2")?;
             unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences")?;
             Ok(r)

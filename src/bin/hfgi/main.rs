@@ -368,9 +368,13 @@ fn plan(a: PlanArgs) -> Result<()> {
     let memory = plan_memory(&scene, &a)?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let name = a.scene.as_ref().map_or("default scene".to_string(), |p| p.display().to_string());
-    let animated = scene.animation != Animation::None;
+    let animated = matches!(scene.animation, Animation::Water(_) | Animation::Bumps(_));
     let motion = if animated {
         format!(", animation {} (new heights every frame)", scene.animation.kind())
+    } else if let Animation::Day(_) = scene.animation {
+        // The day moves lights and camera through the live inputs, which this static plan does
+        // not simulate (`hfgi animate` prints the stages each frame recorded).
+        ", animation day (lights and camera move; heights static; planned here as static frames)".to_string()
     } else {
         String::new()
     };
@@ -381,7 +385,11 @@ fn plan(a: PlanArgs) -> Result<()> {
     text += &format!("resolved knobs: {}\n", scene.gi.describe());
     let planner = hfgi::frame::Planner::new(&scene);
     for f in 0..u64::from(a.frames) {
-        let p = planner.plan(&hfgi::frame::FrameState { heights_changed: f == 0 || animated, frame_index: f });
+        let p = planner.plan(&hfgi::frame::FrameState {
+            heights_changed: f == 0 || animated,
+            frame_index: f,
+            ..Default::default()
+        });
         if f == 0 {
             text += &p.passes_text();
         }

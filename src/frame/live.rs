@@ -1,0 +1,299 @@
+//! Live inputs (docs/integration.md §2): the lights, the material and the shading camera change
+//! between frames through [`Renderer::set_environment`], [`Renderer::set_key_lights`],
+//! [`Renderer::set_material`] and [`Renderer::set_camera`], without a new `Renderer`, a
+//! pipeline, a submit or a wait.
+//!
+//! A setter checks its input (typed errors naming the value), computes the new buffer data on
+//! the CPU (f64, as at creation) and the push constants, and marks what is out of date. The
+//! next [`Renderer::record`] records, into the caller's command buffer, stage `inputs.update`
+//! (a barrier after earlier reads, `vkCmdUpdateBuffer` of each changed range, a barrier before
+//! the compute reads) and then the stages the plan asks for (docs/plan.md §1).
+//!
+//! What is fixed at creation: the number of key-light slots ([`RendererOptions::key_lights`];
+//! unused slots hold a dark light), whether there is an environment set (a renderer created
+//! with an all-zero environment has none), the albedo map, and the material's structure
+//! (whether the surface reflects light at all, which creates the indirect pass, and the
+//! glossy vector pyramid).
+
+use ash::vk;
+use glam::DVec3;
+
+use super::plan::{Changes, Pending, Stage};
+use super::renderer::{needs_indirect, vector_pyramid, Renderer};
+use super::shade::{self, light_data};
+use super::visibility::{SetKind, VisibilityData};
+use crate::error::{Error, Result};
+use crate::math::azimuth;
+use crate::math::triple;
+use crate::scene::model::{Albedo, Camera, Environment, KeyLight, Material, Scene};
+use crate::vk::{barrier, Recorder};
+
+/// Largest data one `vkCmdUpdateBuffer` may write (Vulkan: 65536 bytes).
+const UPDATE_CHUNK: usize = 65536;
+
+/// Creation options of a [`Renderer`] beyond the scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RendererOptions {
+    /// Key-light slots: the most key lights [`Renderer::set_key_lights`] accepts (default and
+    /// minimum: the scene's count). Each slot is a light set (visibility `m_k` azimuths).
+    pub key_lights: Option<usize>,
+}
+
+/// A slot without a light: no radiance, pointing up (its visibility is computed and multiplied
+/// by zero).
+pub fn dark_key_light() -> KeyLight {
+    KeyLight { direction: DVec3::Z, angular_radius: 1f64.to_radians(), radiance: [0.0; 3] }
+}
+
+/// `scene` with its key lights padded with [`dark_key_light`] to `opts.key_lights` slots.
+pub fn with_slots(scene: &Scene, opts: &RendererOptions) -> Result<Scene> {
+    let slots = opts.key_lights.unwrap_or(scene.key_lights.len());
+    if slots < scene.key_lights.len() {
+        return Err(Error::param(
+            "RendererOptions::key_lights",
+            slots,
+            format!("at least the scene's {} key lights", scene.key_lights.len()),
+        ));
+    }
+    if slots > MAX_KEY_LIGHTS {
+        return Err(Error::param("RendererOptions::key_lights", slots, format!("at most {MAX_KEY_LIGHTS}")));
+    }
+    let mut s = scene.clone();
+    s.key_lights.resize(slots, dark_key_light());
+    Ok(s)
+}
+
+/// Most key-light slots (each is a visibility set of the shading's loop).
+pub const MAX_KEY_LIGHTS: usize = 64;
+
+/// One `vkCmdUpdateBuffer` range.
+pub(crate) struct Update {
+    dst: vk::Buffer,
+    offset: u64,
+    data: Vec<u8>,
+}
+
+/// The live state of a renderer: the scene as last set (its heights are those given at
+/// creation and not used after it), the updates to record and the work left out of date.
+pub(crate) struct Live {
+    pub(crate) scene: Scene,
+    updates: Vec<Update>,
+    pub(crate) pending: Pending,
+    triple_count: u32,
+    indirect: bool,
+}
+
+impl Live {
+    pub(crate) fn new(scene: Scene) -> Self {
+        let triple_count = triple::triple(scene.gi.sh_order).entries.len() as u32;
+        let indirect = needs_indirect(&scene);
+        Self { scene, updates: Vec::new(), pending: Pending::default(), triple_count, indirect }
+    }
+
+    /// Queues `data` for `dst` at `offset`, replacing an earlier update of the same range.
+    fn update(&mut self, dst: vk::Buffer, offset: u64, data: Vec<u8>) {
+        self.updates.retain(|u| !(u.dst == dst && u.offset == offset));
+        self.updates.push(Update { dst, offset, data });
+        self.pending.upload_bytes = self.updates.iter().map(|u| u.data.len() as u64).sum();
+    }
+
+    fn changed(&mut self, what: Changes) {
+        self.pending.direct |= what;
+        if self.indirect {
+            self.pending.indirect |= what;
+        }
+    }
+
+    /// After a recorded frame of `stages`: what it did is no longer pending.
+    pub(crate) fn recorded(&mut self, stages: &[Stage]) {
+        let has = |s: Stage| stages.contains(&s);
+        self.updates.clear();
+        self.pending.upload_bytes = 0;
+        if has(Stage::VisibilityKeyLights) {
+            self.pending.key_lights_moved = false;
+        }
+        let (direct, indirect) = (has(Stage::ShadeDirect), has(Stage::IndirectShade(1)));
+        if direct {
+            self.pending.direct = Changes::NONE;
+        }
+        if indirect {
+            self.pending.indirect = Changes::NONE;
+        } else if direct && self.indirect {
+            // The bounces read the direct light just re-shaded.
+            self.pending.indirect |= Changes::DIRECT_LIGHT;
+        }
+    }
+}
+
+/// Records stage `inputs.update` (nothing when no update is queued).
+pub(crate) fn record_updates(live: &Live, rec: &mut Recorder) {
+    if live.updates.is_empty() {
+        return;
+    }
+    rec.scope(Stage::InputsUpdate.name(), |ctx, cmd| {
+        barrier::compute_to_update(ctx, cmd);
+        for u in &live.updates {
+            for (i, chunk) in u.data.chunks(UPDATE_CHUNK).enumerate() {
+                let offset = u.offset + (i * UPDATE_CHUNK) as u64;
+                unsafe { ctx.device().cmd_update_buffer(cmd, u.dst, offset, chunk) };
+            }
+        }
+        barrier::update_to_compute(ctx, cmd);
+    });
+}
+
+impl Renderer {
+    /// Sets the environment light (SH coefficients, already rotated and scaled: see
+    /// [`Environment::rotated`], [`Environment::scaled`]). Takes effect at the next
+    /// [`Renderer::record`], which re-shades without recomputing any visibility.
+    pub fn set_environment(&mut self, environment: &Environment) -> Result<()> {
+        environment.check()?;
+        let kinds = self.visibility.set_kinds();
+        if !kinds.contains(&SetKind::Environment) && environment.sh.iter().any(|c| c.iter().any(|v| *v != 0.0)) {
+            return Err(Error::param(
+                "environment",
+                "non-zero SH coefficients",
+                "all zero: this renderer was created with a black environment and has no environment light set \
+                 (create it with a non-zero environment)",
+            ));
+        }
+        self.live.scene.environment = environment.clone();
+        self.queue_lighting();
+        self.live.changed(Changes::ENVIRONMENT);
+        Ok(())
+    }
+
+    /// Sets the key lights: at most the renderer's slots ([`RendererOptions::key_lights`]);
+    /// the slots left over hold no light. Moved or resized lights re-run
+    /// `visibility.key_lights` at the next [`Renderer::record`]; a change of radiance only
+    /// re-shades.
+    pub fn set_key_lights(&mut self, lights: &[KeyLight]) -> Result<()> {
+        let slots = self.live.scene.key_lights.len();
+        if lights.len() > slots {
+            return Err(Error::param(
+                "key lights",
+                lights.len(),
+                format!("at most {slots} (the key-light slots fixed at creation: RendererOptions::key_lights)"),
+            ));
+        }
+        for (k, l) in lights.iter().enumerate() {
+            l.check(k)?;
+        }
+        let mut next: Vec<KeyLight> = lights.to_vec();
+        next.resize(slots, dark_key_light());
+        let moved = next
+            .iter()
+            .zip(&self.live.scene.key_lights)
+            .any(|(a, b)| a.direction != b.direction || a.angular_radius != b.angular_radius);
+        self.live.scene.key_lights = next;
+        if moved {
+            let data = VisibilityData::for_sets(&self.live.scene, &self.key_sets());
+            for (dst, offset, bytes) in self.visibility.key_light_updates(&data) {
+                self.live.update(dst, offset, bytes);
+            }
+            self.live.pending.key_lights_moved = true;
+        }
+        self.queue_lighting();
+        self.live.changed(Changes::KEY_LIGHTS);
+        Ok(())
+    }
+
+    /// Sets the material: a constant albedo, the Phong specular colour and exponent. Fixed at
+    /// creation: an albedo map (pass it unchanged), and whether the surface reflects light and
+    /// uses the glossy vector pyramid (the passes created for it).
+    pub fn set_material(&mut self, material: &Material) -> Result<()> {
+        material.check()?;
+        let old = &self.live.scene;
+        match (&old.material.albedo, &material.albedo) {
+            (Albedo::Constant(_), Albedo::Constant(_)) => {}
+            (Albedo::Map(a), Albedo::Map(b)) if a == b => {}
+            _ => {
+                return Err(Error::param(
+                    "material albedo",
+                    "a different albedo map, or a map instead of a constant (or back)",
+                    "the albedo map fixed at creation, or a constant albedo when created with one",
+                ))
+            }
+        }
+        let mut next = old.clone();
+        next.material = material.clone();
+        for (what, before, after) in [
+            ("reflects light (the indirect pass)", needs_indirect(old), needs_indirect(&next)),
+            ("uses the glossy vector pyramid", vector_pyramid(old), vector_pyramid(&next)),
+        ] {
+            if before != after {
+                return Err(Error::param(
+                    "material",
+                    format!("a surface that {}{what}", if after { "" } else { "no longer " }),
+                    format!(
+                        "the structure fixed at creation (the surface {}{what})",
+                        if before { "" } else { "never " }
+                    ),
+                ));
+            }
+        }
+        if material.exponent != old.material.exponent {
+            let consts = shade::constants(old.gi.sh_order, f64::from(material.exponent), self.live.triple_count);
+            let dst = self.shade.bindings()[3].raw;
+            self.live.update(dst, 0, bytemuck::cast_slice(&consts).to_vec());
+        }
+        self.live.scene.material = material.clone();
+        self.shade.push_mut().set_material(material);
+        let spec = material.specular.unwrap_or([0.0; 3]);
+        if let Some(i) = self.indirect.as_mut() {
+            i.update_pushes(|p| p.set_material(material), spec);
+        }
+        self.live.changed(Changes::MATERIAL);
+        Ok(())
+    }
+
+    /// Sets the shading camera (the view vector of the glossy lobe; `ViewPass::set_camera`
+    /// moves the view image's camera). Re-shades only a glossy surface: diffuse light does not
+    /// depend on the viewer.
+    pub fn set_camera(&mut self, camera: &Camera) -> Result<()> {
+        camera.check()?;
+        self.live.scene.camera = camera.clone();
+        self.shade.push_mut().set_camera(camera.position);
+        let spec = self.live.scene.material.specular.unwrap_or([0.0; 3]);
+        if let Some(i) = self.indirect.as_mut() {
+            i.update_pushes(|p| p.set_camera(camera.position), spec);
+        }
+        if spec.iter().any(|v| *v != 0.0) {
+            self.live.changed(Changes::CAMERA);
+        }
+        Ok(())
+    }
+
+    /// The lights, material and camera as last set (the scene given at creation, with its key
+    /// lights padded to the slots, then every `set_*`).
+    pub fn live_scene(&self) -> &Scene {
+        &self.live.scene
+    }
+
+    /// The key lights' sets of the live scene, one per slot.
+    fn key_sets(&self) -> Vec<(SetKind, crate::math::azimuth::AzimuthSet)> {
+        let gi = &self.live.scene.gi;
+        let keys = self.live.scene.key_lights.iter().enumerate();
+        keys.map(|(i, l)| {
+            (SetKind::KeyLight(i), azimuth::key_light_set(l, gi.key_light_azimuths as usize, gi.interpolation))
+        })
+        .collect()
+    }
+
+    /// Queues `hfgi.shade.light` from the live lights, in the renderer's set order.
+    fn queue_lighting(&mut self) {
+        let s = &self.live.scene;
+        let mut sets = Vec::new();
+        if has_environment_set(&self.visibility.set_kinds()) {
+            sets.push((SetKind::Environment, azimuth::environment_set(s.gi.azimuths as usize, s.gi.interpolation)));
+        }
+        sets.extend(self.key_sets());
+        let data = light_data(s, &sets);
+        let dst = self.shade.bindings()[0].raw;
+        self.live.update(dst, 0, bytemuck::cast_slice(&data).to_vec());
+    }
+}
+
+fn has_environment_set(kinds: &[SetKind]) -> bool {
+    kinds.contains(&SetKind::Environment)
+}
