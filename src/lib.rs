@@ -20,3 +20,9 @@ pub mod shaders;
 pub mod vk;
 
 pub use error::{Error, Result};
+
+/// The Vulkan bindings and the allocator of hfgi's public API ([`vk::RawHandles`] takes an
+/// `ash::Device` and an `Arc<Mutex<gpu_allocator::vulkan::Allocator>>`): a host uses these
+/// re-exports to be sure its versions are hfgi's.
+pub use ash;
+pub use gpu_allocator;

@@ -23,17 +23,23 @@ fn run_pyramid(ctx: &Context) -> Vec<f32> {
 
 #[test]
 fn device_filter_picks_or_explains() {
-    let err =
-        Context::headless_with(&ContextOptions { validation: Some(false), device_filter: Some("no such gpu".into()) })
-            .err()
-            .expect("a filter matching nothing must fail");
+    let err = Context::headless_with(&ContextOptions {
+        validation: Some(false),
+        device_filter: Some("no such gpu".into()),
+        sync_validation: None,
+    })
+    .err()
+    .expect("a filter matching nothing must fail");
     let msg = err.to_string();
     assert!(msg.contains("no such gpu") && msg.contains("devices present"), "{msg}");
     let name = common::gpu().info().name.clone();
     let word = name.split_whitespace().next().unwrap().to_lowercase();
-    let ctx =
-        Context::headless_with(&ContextOptions { validation: Some(false), device_filter: Some(word.to_uppercase()) })
-            .expect("case-insensitive substring of the device name");
+    let ctx = Context::headless_with(&ContextOptions {
+        validation: Some(false),
+        device_filter: Some(word.to_uppercase()),
+        sync_validation: None,
+    })
+    .expect("case-insensitive substring of the device name");
     assert_eq!(ctx.info().name, name);
 }
 
@@ -51,6 +57,8 @@ fn from_raw_borrows_and_never_destroys_host_objects() {
             queue_family_index: host.queue_family(),
             allocator: host.allocator().clone(),
             debug_utils: host.debug_utils().is_some(),
+            enabled: hfgi::vk::EnabledFeatures { synchronization2: true, dynamic_rendering: true },
+            pipeline_cache: hfgi::ash::vk::PipelineCache::null(),
         })
         .unwrap();
         assert_eq!(run_pyramid(&wrapped), expected);

@@ -232,6 +232,7 @@ fn every_numeric_key_at_its_extremes_gives_finite_output() {
             let speed = match (kind, key) {
                 ("water", "speed") => "animation.damping=0.01",
                 ("water", _) => "animation.speed=0.3",
+                ("day", _) => "animation.sweep_deg=120",
                 _ => "animation.count=2",
             };
             let set = [k.clone(), speed.to_string(), format!("animation.{key}={v}")];

@@ -187,3 +187,47 @@ fn changes_the_renderer_was_not_built_for_are_typed_errors() {
     r.set_environment(&dark.environment).unwrap();
     r.destroy(&ctx);
 }
+
+#[test]
+fn creation_submits_once_and_recorded_transfers_equal_the_blocking_helpers() {
+    use hfgi::vk::{Recorder, RingKind, StagingRing};
+    let ctx = gpu();
+    let s = base();
+    let before = ctx.submit_count();
+    let mut blocking = Renderer::new(&ctx, &s).unwrap();
+    assert_eq!(ctx.submit_count() - before, 1, "creating a renderer submits once");
+    let mut recorded = Renderer::new(&ctx, &s).unwrap();
+    record_frame(&ctx, &mut blocking);
+    record_frame(&ctx, &mut recorded);
+    let next = rough_field(24, 24, 9);
+    blocking.update_heights(&ctx, &next).unwrap();
+    record_frame(&ctx, &mut blocking);
+    let want = layers(&ctx, &blocking);
+    let mut up = StagingRing::new(&ctx, "test.upload", 24 * 24 * 4, RingKind::Upload).unwrap();
+    let mut down = StagingRing::new(&ctx, "test.readback", 5 * 24 * 24 * 16, RingKind::Readback).unwrap();
+    let submits = ctx.submit_count();
+    let (stages, token) = ctx
+        .submit_and_wait(|cmd| {
+            let mut rec = Recorder::new(&ctx, cmd, None);
+            recorded.record_heights_upload(&mut rec, &mut up, &next)?;
+            recorded.record(&mut rec);
+            let token = recorded.record_read_layers(&mut rec, &mut down)?;
+            Ok((rec.stages().to_vec(), token))
+        })
+        .unwrap();
+    assert_eq!(ctx.submit_count() - submits, 1, "only the test's own submit");
+    assert_eq!(stages.first().map(String::as_str), Some("heights.upload"));
+    assert_eq!(stages.last().map(String::as_str), Some("shade.readback"));
+    let got = token.layers(&mut down).unwrap();
+    assert_eq!(rel_diff(&got, &want), 0.0, "recorded upload + read-back differ from the blocking helpers");
+    // A full ring is a typed error, not an overwrite.
+    let e =
+        recorded.record_read_layers(&mut Recorder::new(&ctx, hfgi::ash::vk::CommandBuffer::null(), None), &mut down);
+    assert!(e.unwrap_err().to_string().contains("reset() the ring"));
+    up.reset();
+    down.reset();
+    up.destroy(&ctx);
+    down.destroy(&ctx);
+    blocking.destroy(&ctx);
+    recorded.destroy(&ctx);
+}

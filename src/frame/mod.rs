@@ -13,6 +13,7 @@ pub mod renderer;
 pub mod shade;
 pub mod shared;
 pub mod sweep;
+pub mod transfer;
 pub mod truth;
 pub mod view;
 pub mod visibility;

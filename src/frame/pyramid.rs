@@ -359,6 +359,18 @@ impl HeightPyramid {
         Ok(())
     }
 
+    /// [`HeightPyramid::set_origin`] without the upload: sets the origin and returns the level
+    /// table's new bytes for the caller to record (`vkCmdUpdateBuffer` into
+    /// [`HeightPyramid::table_buffer`] at offset 0).
+    pub(crate) fn origin_table(&mut self, origin: f32) -> Result<Vec<u8>> {
+        if !origin.is_finite() {
+            return Err(Error::param("pyramid origin", origin, "a finite height"));
+        }
+        let entries = table_entries(&self.layout, self.kind, origin);
+        self.origin = origin;
+        Ok(bytemuck::cast_slice(&entries).to_vec())
+    }
+
     /// The origin `z0` subtracted from level 0 on every read ([`HeightPyramid::set_origin`]).
     pub fn origin(&self) -> f32 {
         self.origin

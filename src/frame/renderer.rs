@@ -49,7 +49,7 @@ pub struct Renderer {
     /// Present when the scene needs indirect light (bounces > 0 and some exit radiance).
     pub indirect: Option<IndirectPass>,
     planner: Planner,
-    heights_changed: bool,
+    pub(super) heights_changed: bool,
     stats: RendererStats,
     /// The live inputs (`set_environment`, …; src/frame/live.rs).
     pub(super) live: Live,
@@ -63,8 +63,13 @@ impl Renderer {
 
     /// [`Renderer::new`] with creation options (e.g. more key-light slots than the scene has,
     /// for [`Renderer::set_key_lights`]).
+    /// Creation submits once: every upload is batched ([`Context::batched`]).
     pub fn with_options(ctx: &Context, scene: &Scene, options: &RendererOptions) -> Result<Self> {
         let scene = &live::with_slots(scene, options)?;
+        ctx.batched(|| Self::create(ctx, scene))
+    }
+
+    fn create(ctx: &Context, scene: &Scene) -> Result<Self> {
         scene.gi.validate()?;
         scene.check_limits()?;
         let (w, h) = (scene.field.width(), scene.field.height());
@@ -116,13 +121,17 @@ impl Renderer {
     }
 
     /// Records the frame: exactly the stages of [`Renderer::plan_next`], in its order
-    /// (docs/plan.md): the pyramid and the visibility only when the heights changed since the
-    /// last recorded frame; then the direct shading and the indirect bounces. With
-    /// `gi.amortize` and unchanged heights, even frames shade the direct light and odd frames
-    /// the indirect light (§7); when the heights changed, both.
+    /// (docs/plan.md): the live inputs' updates, the pyramid and the visibility only when the
+    /// heights changed since the last recorded frame (the key lights' when they moved); then
+    /// what is out of date of the direct shading and the indirect bounces (amortised with
+    /// `gi.amortize`); nothing when nothing changed. A frame that records anything begins with
+    /// a barrier after every earlier command (docs/integration.md §3).
     pub fn record(&mut self, rec: &mut Recorder) {
         let plan = self.plan_next();
         let first = rec.stages().len();
+        if !plan.stages.is_empty() {
+            crate::vk::barrier::before_frame(rec.ctx, rec.cmd);
+        }
         for s in &plan.stages {
             self.record_stage(rec, s.stage);
         }

@@ -241,11 +241,7 @@ impl ShadePass {
             }
             let out = Buffer::new(ctx, OUTPUT_BUFFER, output_bytes(w, h), usage, MemoryLocation::GpuOnly)?;
             // Planes not written by a frame (indirect with bounces = 0) must read as zero.
-            let cleared = ctx.submit_and_wait(|cmd| {
-                unsafe { ctx.device().cmd_fill_buffer(cmd, out.raw, 0, vk::WHOLE_SIZE, 0) };
-                barrier::transfer_to_compute(ctx, cmd);
-                Ok(())
-            });
+            let cleared = memory::zero(ctx, &out);
             bufs.push(out);
             cleared?;
             let inc_bytes = incident_bytes(scene);

@@ -302,8 +302,28 @@ pub struct ViewPass {
 impl ViewPass {
     /// Creates the pass for a `width × height` field (texel size `texel_size`) seen from
     /// `camera` (its `width × height` is the image size), reading `inputs`. Creates one
-    /// graphics pipeline, the attachments and the index buffer (uploaded now, waits).
+    /// graphics pipeline, the attachments and the index buffer (uploaded now: one submit,
+    /// waits). Needs `dynamicRendering` (a typed error on a host device without it).
     pub fn new(
+        ctx: &Context,
+        width: usize,
+        height: usize,
+        camera: &Camera,
+        texel_size: f64,
+        inputs: &ViewInputs,
+        opts: &ViewOptions,
+    ) -> Result<Self> {
+        if !ctx.enabled_features().dynamic_rendering {
+            return Err(Error::Unsupported(
+                "the view pass renders with dynamicRendering (VkPhysicalDeviceVulkan13Features), which the host's \
+                 device was created without (RawHandles::enabled)"
+                    .into(),
+            ));
+        }
+        ctx.batched(|| Self::build(ctx, width, height, camera, texel_size, inputs, opts))
+    }
+
+    fn build(
         ctx: &Context,
         width: usize,
         height: usize,

@@ -59,8 +59,12 @@ pub struct WaterSim {
 impl WaterSim {
     /// Validates `params` (ranges and the stability condition), allocates the state for a
     /// `width × height` lattice and uploads `initial` (row-major displacements `z`, `W·H` finite
-    /// values) as `z^0` with `v^0 = 0`: the surface starts at rest. Waits for the upload.
+    /// values) as `z^0` with `v^0 = 0`: the surface starts at rest. One submit; waits for it.
     pub fn new(ctx: &Context, width: usize, height: usize, params: WaterParams, initial: &[f32]) -> Result<Self> {
+        ctx.batched(|| Self::build(ctx, width, height, params, initial))
+    }
+
+    fn build(ctx: &Context, width: usize, height: usize, params: WaterParams, initial: &[f32]) -> Result<Self> {
         params.validate()?;
         let max = ctx.info().max_image_dimension_2d;
         if width < 2 || height < 2 || width > max as usize || height > max as usize {

@@ -70,6 +70,53 @@ pub fn update_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
     );
 }
 
+/// Transfer writes (creation's batched uploads and fills) → every later command's reads and
+/// writes (compute, vertex/index input, fragment, transfer).
+pub fn transfer_to_all(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE),
+        (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE),
+    );
+}
+
+/// Transfer writes → later transfer writes and reads (creation's batched uploads, in order).
+pub fn transfer_to_transfer(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE),
+        (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE | vk::AccessFlags2::TRANSFER_READ),
+    );
+}
+
+/// The start of a `Renderer` frame: every earlier command in submission order (the host's
+/// passes, hfgi's previous frame) finishes its reads and makes its writes visible before the
+/// frame's compute and transfer work (write-after-read and read-after-write across frames and
+/// with the host's own passes).
+pub fn before_frame(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::MEMORY_WRITE),
+        (
+            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::ALL_TRANSFER,
+            vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+        ),
+    );
+}
+
+/// Transfer writes → host reads (a read-back ring, read after the host waited).
+pub fn transfer_to_host(ctx: &Context, cmd: vk::CommandBuffer) {
+    memory_barrier(
+        ctx,
+        cmd,
+        (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE),
+        (vk::PipelineStageFlags2::HOST, vk::AccessFlags2::HOST_READ),
+    );
+}
+
 /// Compute shader writes → transfer reads (downloads).
 pub fn compute_to_transfer(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(

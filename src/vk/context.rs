@@ -19,6 +19,10 @@ pub struct ContextOptions {
     pub validation: Option<bool>,
     /// Substring (case-insensitive) of the device name to use. `None` reads `HFGI_DEVICE`.
     pub device_filter: Option<String>,
+    /// With validation, also enable its synchronization validation (hazards between commands
+    /// and submissions: missing barriers). `None` reads `HFGI_SYNC_VALIDATION` (`0` turns it
+    /// off; the test suite turns it on).
+    pub sync_validation: Option<bool>,
 }
 
 /// What a host engine hands to [`Context::from_raw`]. hfgi destroys none of these.
@@ -35,6 +39,28 @@ pub struct RawHandles {
     pub allocator: Arc<Mutex<Allocator>>,
     /// Whether the host enabled `VK_EXT_debug_utils` on the instance (debug labels and names).
     pub debug_utils: bool,
+    /// The Vulkan 1.3 features the host enabled on `device` (a device cannot be asked what it was
+    /// created with): [`Context::from_raw`] refuses a device without `synchronization2`.
+    pub enabled: EnabledFeatures,
+    /// The host's pipeline cache, or null: every pipeline hfgi creates is created through it.
+    pub pipeline_cache: vk::PipelineCache,
+}
+
+/// The device features hfgi needs, as the host enabled them ([`RawHandles::enabled`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EnabledFeatures {
+    /// `VkPhysicalDeviceVulkan13Features::synchronization2`: every barrier hfgi records.
+    pub synchronization2: bool,
+    /// `VkPhysicalDeviceVulkan13Features::dynamicRendering`: the view pass only.
+    pub dynamic_rendering: bool,
+}
+
+impl EnabledFeatures {
+    /// The features of the `VkPhysicalDeviceVulkan13Features` the host chained into its
+    /// `VkDeviceCreateInfo`.
+    pub fn from_vulkan13(f: &vk::PhysicalDeviceVulkan13Features) -> Self {
+        Self { synchronization2: f.synchronization2 == vk::TRUE, dynamic_rendering: f.dynamic_rendering == vk::TRUE }
+    }
 }
 
 /// Facts about the chosen device, for reports and benchmarks.
@@ -80,6 +106,20 @@ pub struct Context {
     submit: Mutex<Option<(vk::CommandPool, vk::Fence)>>,
     pipelines_created: std::sync::atomic::AtomicU64,
     submits: std::sync::atomic::AtomicU64,
+    enabled: EnabledFeatures,
+    pipeline_cache: vk::PipelineCache,
+    /// Transfers deferred by [`Context::batched`] (creation's one submit).
+    batch: Mutex<Option<Batch>>,
+}
+
+/// A transfer command recorded later, into the batch's command buffer.
+pub(crate) type Deferred = Box<dyn FnOnce(&ash::Device, vk::CommandBuffer) + Send>;
+
+/// What [`Context::batched`] collects: commands, and the staging buffers they read.
+#[derive(Default)]
+struct Batch {
+    commands: Vec<Deferred>,
+    staging: Vec<super::Buffer>,
 }
 
 unsafe extern "system" fn on_message(
@@ -182,9 +222,15 @@ impl Context {
             .application_info(&app)
             .enabled_layer_names(&layer_ptrs)
             .enabled_extension_names(&ext_ptrs);
+        let sync = opts.sync_validation.unwrap_or_else(|| env_flag("HFGI_SYNC_VALIDATION"));
+        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
         if validation {
             // Chained so that instance creation/destruction messages are caught too.
             ici = ici.push_next(&mut dbg_info);
+            if sync {
+                ici = ici.push_next(&mut features);
+            }
         }
         let instance = unsafe { entry.create_instance(&ici, None) }
             .map_err(|result| Error::NoDevice(format!("vkCreateInstance failed with {result:?}; {}", driver_hint())))?;
@@ -248,6 +294,9 @@ impl Context {
         Ok(Self {
             pipelines_created: Default::default(),
             submits: Default::default(),
+            enabled: EnabledFeatures { synchronization2: true, dynamic_rendering: true },
+            pipeline_cache: vk::PipelineCache::null(),
+            batch: Mutex::new(None),
             entry,
             instance,
             physical,
@@ -266,9 +315,14 @@ impl Context {
 
     /// Wraps a host engine's Vulkan objects. The device must have Vulkan 1.3 with
     /// `synchronization2` enabled (and `dynamicRendering` for the view pass,
-    /// [`crate::frame::view`]). hfgi never destroys the instance, device or allocator it was
-    /// given; it destroys only the objects it created (its own command pool and fence).
-    /// Validation messages are the host's business in this mode (no messenger is installed).
+    /// [`crate::frame::view`]), and the queue family must support compute: otherwise a typed
+    /// error names what is missing ([`RawHandles::enabled`] says what the host enabled; the
+    /// physical device must support it too). hfgi never destroys the instance, device,
+    /// allocator or pipeline cache it was given; it destroys only the objects it created (its
+    /// own command pool and fence, the first time [`Context::submit_and_wait`] runs), and
+    /// dropping the `Context` never waits on the host's device (`submit_and_wait` has waited
+    /// for its own work already). Validation messages are the host's business in this mode
+    /// (no messenger is installed).
     pub fn from_raw(raw: RawHandles) -> Result<Self> {
         let props = unsafe { raw.instance.get_physical_device_properties(raw.physical_device) };
         if props.api_version < vk::API_VERSION_1_3 {
@@ -278,11 +332,15 @@ impl Context {
                 vk::api_version_minor(props.api_version)
             )));
         }
+        check_host_device(&raw)?;
         let debug_device = raw.debug_utils.then(|| ash::ext::debug_utils::Device::new(&raw.instance, &raw.device));
         let info = Self::describe(&raw.instance, raw.physical_device, raw.queue_family_index);
         Ok(Self {
             pipelines_created: Default::default(),
             submits: Default::default(),
+            enabled: raw.enabled,
+            pipeline_cache: raw.pipeline_cache,
+            batch: Mutex::new(None),
             entry: raw.entry,
             instance: raw.instance,
             physical: raw.physical_device,
@@ -438,6 +496,17 @@ impl Context {
         self.pipelines_created.load(std::sync::atomic::Ordering::Relaxed)
     }
 
+    /// The pipeline cache every pipeline is created through: the host's
+    /// ([`RawHandles::pipeline_cache`]) or null.
+    pub fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.pipeline_cache
+    }
+
+    /// The features hfgi may use on this device (all of them on a headless context).
+    pub fn enabled_features(&self) -> EnabledFeatures {
+        self.enabled
+    }
+
     pub(crate) fn count_pipeline(&self) {
         self.pipelines_created.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
@@ -477,6 +546,62 @@ impl Context {
         if let (Some(d), Ok(c)) = (&self.debug_device, CString::new(name)) {
             let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&c);
             let _ = unsafe { d.set_debug_utils_object_name(&info) };
+        }
+    }
+
+    /// Runs `f` (object creation) with every upload and fill it makes deferred, then records
+    /// them all into one command buffer and submits it once (a barrier from the transfers to
+    /// every later command, then a wait): creating a `Renderer`, a `ViewPass` or a `WaterSim`
+    /// is one submit (docs/integration.md). Nested calls join the outer batch. When `f` fails,
+    /// nothing is submitted and the staging buffers are freed.
+    pub fn batched<R>(&self, f: impl FnOnce() -> Result<R>) -> Result<R> {
+        let lock = || self.batch.lock().map_err(|_| Error::Unsupported("batch lock poisoned".into()));
+        {
+            let mut b = lock()?;
+            if b.is_some() {
+                drop(b);
+                return f();
+            }
+            *b = Some(Batch::default());
+        }
+        let r = f();
+        let batch = lock()?.take().unwrap_or_default();
+        let submitted = match (&r, batch.commands.is_empty()) {
+            (Ok(_), false) => self.submit_and_wait(|cmd| {
+                for (i, c) in batch.commands.into_iter().enumerate() {
+                    if i > 0 {
+                        // Two uploads may write the same range (a level table, then its origin).
+                        super::barrier::transfer_to_transfer(self, cmd);
+                    }
+                    c(&self.device, cmd);
+                }
+                super::barrier::transfer_to_all(self, cmd);
+                Ok(())
+            }),
+            _ => Ok(()),
+        };
+        batch.staging.into_iter().for_each(|b| b.destroy(self));
+        submitted?;
+        r
+    }
+
+    /// Defers `command` (and keeps `staging` alive until it ran) when a [`Context::batched`]
+    /// is collecting (`None`); otherwise gives both back for an immediate submit.
+    pub(crate) fn defer(
+        &self,
+        command: Deferred,
+        staging: Option<super::Buffer>,
+    ) -> Option<(Deferred, Option<super::Buffer>)> {
+        match self.batch.lock() {
+            Ok(mut g) => match g.as_mut() {
+                Some(b) => {
+                    b.commands.push(command);
+                    b.staging.extend(staging);
+                    None
+                }
+                None => Some((command, staging)),
+            },
+            Err(_) => Some((command, staging)),
         }
     }
 
@@ -524,7 +649,11 @@ impl Context {
 impl Drop for Context {
     fn drop(&mut self) {
         unsafe {
-            let _ = self.device.device_wait_idle();
+            // A borrowed device is the host's: hfgi's own submits have completed (each waits for
+            // its fence), so there is nothing of hfgi's to wait for.
+            if self.owned {
+                let _ = self.device.device_wait_idle();
+            }
             if let Ok(mut g) = self.submit.lock() {
                 if let Some((pool, fence)) = g.take() {
                     self.device.destroy_command_pool(pool, None);
@@ -543,6 +672,44 @@ impl Drop for Context {
             }
         }
     }
+}
+
+/// [`Context::from_raw`]'s checks: Vulkan 1.3, `synchronization2` enabled and supported,
+/// `dynamicRendering` supported where the host says it enabled it, a compute queue family.
+fn check_host_device(raw: &RawHandles) -> Result<()> {
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+    unsafe { raw.instance.get_physical_device_features2(raw.physical_device, &mut f2) };
+    let supported = EnabledFeatures::from_vulkan13(&f13);
+    let missing = |what: &str, why: &str| {
+        Error::Unsupported(format!(
+            "the host's device was created without {what} (VkPhysicalDeviceVulkan13Features), which {why}; \
+             enable it in VkDeviceCreateInfo and say so in RawHandles::enabled"
+        ))
+    };
+    if !raw.enabled.synchronization2 {
+        return Err(missing("synchronization2", "every barrier hfgi records needs"));
+    }
+    for (name, enabled, has) in [
+        ("synchronization2", raw.enabled.synchronization2, supported.synchronization2),
+        ("dynamicRendering", raw.enabled.dynamic_rendering, supported.dynamic_rendering),
+    ] {
+        if enabled && !has {
+            return Err(Error::Unsupported(format!(
+                "RawHandles::enabled says {name} is enabled, but the physical device does not support it"
+            )));
+        }
+    }
+    let families = unsafe { raw.instance.get_physical_device_queue_family_properties(raw.physical_device) };
+    let flags = families.get(raw.queue_family_index as usize).map(|f| f.queue_flags);
+    if !flags.is_some_and(|f| f.contains(vk::QueueFlags::COMPUTE)) {
+        return Err(Error::Unsupported(format!(
+            "queue family {} of the host's device {}: hfgi records compute work and needs a compute queue",
+            raw.queue_family_index,
+            if flags.is_some() { "has no compute support" } else { "does not exist" }
+        )));
+    }
+    Ok(())
 }
 
 /// What to check when the Vulkan loader finds no driver (`ERROR_INCOMPATIBLE_DRIVER`,

@@ -129,7 +129,7 @@ impl GraphicsPipeline {
                 .layout(me.layout)
                 .push_next(&mut rendering)];
             ctx.count_pipeline();
-            let made = unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &ci, None) };
+            let made = unsafe { d.create_graphics_pipelines(ctx.pipeline_cache(), &ci, None) };
             me.pipeline = made.map_err(|(_, e)| Error::Vulkan { call: "vkCreateGraphicsPipelines", result: e })?[0];
             ctx.set_name(me.pipeline, &me.name);
             me.pool = create_pool(ctx, desc.kinds, desc.max_sets)?;

@@ -227,16 +227,38 @@ pub fn upload(ctx: &Context, dst: &Buffer, offset: u64, data: &[u8]) -> Result<(
         vk::BufferUsageFlags::TRANSFER_SRC,
         MemoryLocation::CpuToGpu,
     )?;
-    let r = staging.mapped().map(|m| m[..data.len()].copy_from_slice(data)).and_then(|_| {
-        ctx.submit_and_wait(|cmd| {
-            let region = [vk::BufferCopy::default().src_offset(0).dst_offset(offset).size(data.len() as u64)];
-            unsafe { ctx.device().cmd_copy_buffer(cmd, staging.raw, dst.raw, &region) };
-            super::barrier::transfer_to_compute(ctx, cmd);
-            Ok(())
-        })
+    if let Err(e) = staging.mapped().map(|m| m[..data.len()].copy_from_slice(data)) {
+        staging.destroy(ctx);
+        return Err(e);
+    }
+    let (src, dst_raw, len) = (staging.raw, dst.raw, data.len() as u64);
+    let copy: super::context::Deferred = Box::new(move |d: &ash::Device, cmd: vk::CommandBuffer| {
+        let region = [vk::BufferCopy::default().src_offset(0).dst_offset(offset).size(len)];
+        unsafe { d.cmd_copy_buffer(cmd, src, dst_raw, &region) };
     });
-    staging.destroy(ctx);
+    let Some((copy, staging)) = ctx.defer(copy, Some(staging)) else { return Ok(()) };
+    let r = ctx.submit_and_wait(|cmd| {
+        copy(ctx.device(), cmd);
+        super::barrier::transfer_to_compute(ctx, cmd);
+        Ok(())
+    });
+    staging.into_iter().for_each(|s| s.destroy(ctx));
     r
+}
+
+/// Fills `dst` with zeros (`vkCmdFillBuffer`): deferred inside [`Context::batched`], else
+/// submitted and waited for.
+pub fn zero(ctx: &Context, dst: &Buffer) -> Result<()> {
+    let raw = dst.raw;
+    let fill: super::context::Deferred = Box::new(move |d: &ash::Device, cmd: vk::CommandBuffer| unsafe {
+        d.cmd_fill_buffer(cmd, raw, 0, vk::WHOLE_SIZE, 0)
+    });
+    let Some((fill, _)) = ctx.defer(fill, None) else { return Ok(()) };
+    ctx.submit_and_wait(|cmd| {
+        fill(ctx.device(), cmd);
+        super::barrier::transfer_to_all(ctx, cmd);
+        Ok(())
+    })
 }
 
 /// Reads `len` bytes from `src` (a buffer with TRANSFER_SRC usage) at byte `offset` and waits.

@@ -7,13 +7,15 @@ pub mod graphics;
 pub mod memory;
 pub mod pipeline;
 pub mod recorder;
+pub mod staging;
 pub mod timer;
 
 pub use ash;
 pub use ash::vk as raw;
-pub use context::{Context, ContextOptions, DeviceInfo, RawHandles};
+pub use context::{Context, ContextOptions, DeviceInfo, EnabledFeatures, RawHandles};
 pub use graphics::GraphicsPipeline;
 pub use memory::{Buffer, Image};
 pub use pipeline::{ComputePipeline, DescriptorKind};
 pub use recorder::Recorder;
+pub use staging::{RingKind, StagingRing};
 pub use timer::StageTimer;

@@ -83,7 +83,7 @@ impl ComputePipeline {
             }
             let ci = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(me.layout)];
             ctx.count_pipeline();
-            let made = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &ci, None) };
+            let made = unsafe { d.create_compute_pipelines(ctx.pipeline_cache(), &ci, None) };
             unsafe { d.destroy_shader_module(module, None) };
             me.pipeline = made.map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })?[0];
             ctx.set_name(me.pipeline, &me.name);

@@ -20,10 +20,19 @@ pub struct Gpu {
     pub deliberate: bool,
 }
 
+/// Synchronization validation in the tests: on unless `HFGI_SYNC_VALIDATION=0`.
+fn sync_validation() -> bool {
+    std::env::var("HFGI_SYNC_VALIDATION").map_or(true, |v| v != "0")
+}
+
 /// A validated headless context (lavapipe in CI). Panics with the reason if none can be made.
 pub fn gpu() -> Gpu {
-    let ctx = Context::headless_with(&ContextOptions { validation: Some(true), device_filter: None })
-        .unwrap_or_else(|e| panic!("cannot create a validated Vulkan context: {e}"));
+    let ctx = Context::headless_with(&ContextOptions {
+        validation: Some(true),
+        device_filter: None,
+        sync_validation: Some(sync_validation()),
+    })
+    .unwrap_or_else(|e| panic!("cannot create a validated Vulkan context: {e}"));
     let store = ctx.validation_store();
     Gpu { ctx: Some(ctx), store, deliberate: false }
 }

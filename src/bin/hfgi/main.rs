@@ -161,7 +161,11 @@ struct PlanArgs {
 }
 
 pub(crate) fn context(d: &DeviceArgs) -> Result<Context> {
-    let opts = ContextOptions { validation: d.validation.then_some(true), device_filter: d.device.clone() };
+    let opts = ContextOptions {
+        validation: d.validation.then_some(true),
+        device_filter: d.device.clone(),
+        sync_validation: None,
+    };
     let what = match &d.device {
         Some(name) => format!("creating the Vulkan context for --device {name:?}"),
         None => "creating the Vulkan context".to_string(),
@@ -425,7 +429,7 @@ fn plan_memory(scene: &hfgi::scene::model::Scene, a: &PlanArgs) -> Result<String
     if a.no_device {
         return Ok(text);
     }
-    let opts = ContextOptions { validation: Some(false), device_filter: a.device.clone() };
+    let opts = ContextOptions { validation: Some(false), device_filter: a.device.clone(), sync_validation: None };
     match Context::headless_with(&opts) {
         Ok(ctx) => {
             memory::check_device(scene, ctx.info())
@@ -461,7 +465,11 @@ fn devices() -> Result<()> {
     for (name, kind) in &list {
         text += &format!("{name} ({kind:?})\n");
     }
-    let ctx = Context::headless_with(&ContextOptions { validation: Some(false), device_filter: None })?;
+    let ctx = Context::headless_with(&ContextOptions {
+        validation: Some(false),
+        device_filter: None,
+        sync_validation: None,
+    })?;
     let i = ctx.info();
     text += &format!(
         "chosen: {} — driver {}, Vulkan {}.{}.{}, maxImageDimension2D {}, timestamps: {}",
