@@ -1,9 +1,11 @@
 //! The command line documents every command and option, and reports bad input with context.
 
+mod common;
+
 use std::process::Command;
 
 fn hfgi(args: &[&str]) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hfgi")).args(args).output().expect("run hfgi");
+    let out = Command::new(common::hfgi_exe()).args(args).output().expect("run hfgi");
     (out.status.success(), format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr)))
 }
 

@@ -439,7 +439,7 @@ fn sixty_water_frames_through_the_renderer() {
 fn cli_animate_day_moves_sun_sky_and_camera_through_live_inputs() {
     // `scenes/day.toml` at 32² (docs/dynamic.md §4): 4 frames from sunrise to sunset.
     let dir = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi"))
+    let out = std::process::Command::new(common::hfgi_exe())
         .args(["animate", "scenes/day.toml", "--frames", "4", "--validation"])
         .args(["--set", "heightfield.size=32", "--set", "gi.azimuths=8", "--set", "animation.day_frames=4"])
         .args(["--set", "camera.width=64", "--set", "camera.height=36", "--out", dir.path().to_str().unwrap()])
@@ -467,7 +467,7 @@ fn cli_animate_day_moves_sun_sky_and_camera_through_live_inputs() {
 fn cli_animate_writes_pngs_and_a_gif() {
     let dir = tempfile::tempdir().unwrap();
     let gif = dir.path().join("anim.gif");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi"))
+    let out = std::process::Command::new(common::hfgi_exe())
         .args([
             "animate",
             "scenes/water.toml",
@@ -517,7 +517,7 @@ fn cli_animate_writes_pngs_and_a_gif() {
 
     // Bad input is an error with context, not a panic.
     let run = |args: &[&str]| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi")).args(args).output().unwrap();
+        let o = std::process::Command::new(common::hfgi_exe()).args(args).output().unwrap();
         (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
     };
     let (ok, msg) = run(&["animate", "scenes/default.toml", "--frames", "2", "--set", "heightfield.size=16"]);

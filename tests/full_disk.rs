@@ -6,6 +6,8 @@
 //! Mounting needs root (CI runs as root). Elsewhere the test says it was skipped; with
 //! `HFGI_REQUIRE_TMPFS=1` (set by `.ci/run`) a failed mount fails the test instead.
 
+mod common;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -79,7 +81,7 @@ fn survives_a_full_disk(args: &[&str], targets: &[&str]) {
     fs.fill();
     let before = snapshot(fs.path());
     let args: Vec<String> = args.iter().map(|a| a.replace("{}", &root)).collect();
-    let o = Command::new(env!("CARGO_BIN_EXE_hfgi")).args(&args).env("RUST_BACKTRACE", "0").output().unwrap();
+    let o = Command::new(common::hfgi_exe()).args(&args).env("RUST_BACKTRACE", "0").output().unwrap();
     let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
     assert!(!o.status.success(), "{args:?} succeeded on a full disk:\n{text}");
     assert!(text.contains("No space left on device") && !text.contains("panicked"), "{args:?}:\n{text}");

@@ -299,7 +299,7 @@ fn plan_is_pure_and_lists_every_pass() {
 
 #[test]
 fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi"))
+    let out = std::process::Command::new(common::hfgi_exe())
         .args(["plan", "scenes/default.toml", "--set", "gi.bounces=1", "--frames", "3"])
         // No usable Vulkan driver: creating a context would fail.
         .env("VK_DRIVER_FILES", "/nonexistent/hfgi-no-driver.json")
@@ -342,7 +342,7 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
         assert!(text.contains(&p.to_string()), "frame {f} of the plan is not in the output:\n{p}");
     }
     // Bad input is an error, not a panic.
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi"))
+    let out = std::process::Command::new(common::hfgi_exe())
         .args(["plan", "scenes/default.toml", "--frames", "0"])
         .output()
         .expect("run hfgi plan");
@@ -354,7 +354,7 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
 fn hfgi_plan_buffers_lists_every_buffer_of_the_estimate() {
     // No device: the listing comes from hfgi::frame::memory::renderer, whose total it must sum to.
     let args = ["plan", "--no-device", "--buffers", "--set", "heightfield.size=32", "--set", "gi.bounces=1"];
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hfgi")).args(args).output().expect("run hfgi plan");
+    let out = std::process::Command::new(common::hfgi_exe()).args(args).output().expect("run hfgi plan");
     let text = String::from_utf8_lossy(&out.stdout).to_string();
     assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
     let listed: Vec<(&str, f64)> = text
@@ -373,4 +373,22 @@ fn hfgi_plan_buffers_lists_every_buffer_of_the_estimate() {
     let sum: f64 = listed.iter().map(|(_, m)| m).sum();
     assert!((sum - renderer).abs() <= 0.001 * listed.len() as f64 + 0.01, "{sum} vs {renderer}\n{text}");
     assert!(!text.contains("largest buffer"), "{text}");
+}
+
+#[test]
+fn hfgi_plan_prints_the_stage_table_the_planner_and_recorder_read() {
+    let out = std::process::Command::new(common::hfgi_exe())
+        .args(["plan", "--stages", "--no-device"])
+        .output()
+        .expect("run hfgi plan --stages");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    for row in hfgi::frame::STAGES {
+        let line =
+            text.lines().find(|l| l.trim_start().starts_with(row.name)).unwrap_or_else(|| panic!("{}", row.name));
+        assert!(line.contains(row.pass) && line.contains(row.rule), "{line}");
+    }
+    // The passes' stage constants are the table's names, and the recorder names scopes by them.
+    assert_eq!(hfgi::frame::indirect::STAGE_SCAN, hfgi::frame::Stage::IndirectScan(1).name());
+    assert_eq!(hfgi::frame::view::STAGE_RASTER, "view.raster");
 }

@@ -2,11 +2,13 @@
 //! command line: unbounded inputs and work, late checks, unhelpful messages, a stdout that
 //! cannot be written, and the animation's outputs (frames and a streamed GIF, together).
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
 fn run(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_hfgi"));
+    let mut c = Command::new(common::hfgi_exe());
     c.args(args).env("RUST_BACKTRACE", "0");
     for (k, v) in env {
         c.env(k, v);
@@ -129,7 +131,7 @@ fn vulkan_setup_failures_name_the_driver_manifest_and_the_device_flag() {
 #[test]
 fn a_stdout_that_cannot_be_written_is_an_error() {
     let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_hfgi"))
+    let o = Command::new(common::hfgi_exe())
         .args(["plan", "--no-device"])
         .env("RUST_BACKTRACE", "0")
         .stdout(full)

@@ -101,7 +101,16 @@ fn every_example_scene_loads() {
     names.sort();
     assert_eq!(
         names,
-        ["bumps.toml", "city.toml", "cliff.toml", "craters.toml", "default.toml", "terrain-bspline.toml", "water.toml"]
+        [
+            "bumps.toml",
+            "city.toml",
+            "cliff.toml",
+            "craters.toml",
+            "day.toml",
+            "default.toml",
+            "terrain-bspline.toml",
+            "water.toml"
+        ]
     );
 }
 
@@ -112,6 +121,9 @@ fn example_scenes_have_their_features() {
     assert_eq!(city.material.specular, Some([0.04; 3]));
     assert_eq!(city.material.exponent, 64.0);
     assert!(city.key_lights[0].direction.z < 0.2, "low sun");
+    let day = load("day.toml");
+    let hfgi::scene::animated::Animation::Day(p) = &day.animation else { panic!("day.toml: {:?}", day.animation) };
+    assert_eq!((p.day_frames, p.max_elevation_deg, p.orbit_turns), (12, 60.0, 0.25));
     let cliff = load("cliff.toml");
     assert_eq!(cliff.environment.sh, Preset::Overcast.sh());
     assert_eq!(cliff.key_lights.len(), 1);

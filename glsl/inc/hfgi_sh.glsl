@@ -1,6 +1,6 @@
 // hfgi — real SH evaluation for any order HFGI_N (CONVENTIONS: orthonormal, no Condon–Shortley
 // phase, index k = l(l+1)+m). The includer declares the spec constant HFGI_N and a buffer
-// holding `float hfgi_klm[64]`: K_l^|m| (times √2 for m ≠ 0) at index l(l+1)+m.
+// holding `float hfgi_klm[HFGI_MAX_SH_ORDER²]`: K_l^|m| (times √2 for m ≠ 0) at index l(l+1)+m.
 #ifndef HFGI_SH_GLSL
 #define HFGI_SH_GLSL
 

@@ -7,7 +7,7 @@
 // NLP vector u of eq. 12 (piecewise constant in ω, eq. 8, starting at ω_min), and fold the wedges
 // and z-rotations of eq. 19–21 into U += A_j u_j (per RGB channel).
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
 layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
@@ -31,9 +31,9 @@ layout(std430, binding = 7) readonly buffer Fold { float hfgi_fold[]; };      //
 layout(std430, binding = 8) readonly buffer RLevel { uint hfgi_radiance_level[]; }; // per scan sample, from `first`
 layout(std430, binding = 9) buffer U { vec4 hfgi_u[]; };                      // receivers × n², over azimuth chunks
 layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
-    float hfgi_klm[64];
-    float hfgi_zh_diffuse[8];
-    float hfgi_zh_glossy[8]; // √(4π/(2l+1)) · Phong ZH
+    float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER];
+    float hfgi_zh_diffuse[HFGI_MAX_SH_ORDER];
+    float hfgi_zh_glossy[HFGI_MAX_SH_ORDER]; // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
 layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };           // pyramid.max (with the bound)

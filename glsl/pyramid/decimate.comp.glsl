@@ -2,7 +2,7 @@
 // Height pyramid, reduction step (NS09 §5.2, §9): level i is level i-1 bilinearly decimated
 // by 2^(1/k_v) per axis.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(std430, binding = 0) buffer Levels { float hfgi_levels[]; };
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(push_constant) uniform Push { hfgi_PyramidPush pc; };

@@ -3,7 +3,7 @@
 // heights, m_L and ov_L (hfgi_max.glsl), from the heights (L = 0) or from m_{L−1}. One dispatch
 // per level, a compute→compute barrier between them.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(std430, binding = 2) buffer Max { float hfgi_max[]; };

@@ -4,7 +4,7 @@
 // raw, as gi.level0 = "bilinear" reads level 0).
 // pc.level: 0 = stack mode, 1 = pyramid mode; pc.out_width/height = working resolution.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 64) in;
+layout(local_size_x = HFGI_WORKGROUP_1D) in;
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };

@@ -2,7 +2,7 @@
 // Height pyramid, synthesis step (NS09 §9, "stack" mode): every level is resampled back to the
 // working resolution with a cubic B-spline (Sigg & Hadwiger). Dispatch z = level.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(std430, binding = 2) writeonly buffer Stack { float hfgi_stack[]; };

@@ -5,7 +5,7 @@
 // Scalar pyramid: channels 0-2 = diffuse + glossy. Vector pyramid: channels 0-2 = diffuse and
 // channel 3 + 3k + c = the incident SH coefficient T_k (colour c) of the same bounce.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(std430, binding = 0) readonly buffer Shade { vec4 hfgi_shade[]; };    // shade planes (W×H each)
 layout(std430, binding = 1) readonly buffer Bounce { vec4 hfgi_bounce[]; };  // 2 planes: diffuse, glossy
 layout(std430, binding = 2) writeonly buffer Levels { float hfgi_radiance_levels[]; };
@@ -18,8 +18,8 @@ void main() {
     if (p.x >= pc.width || p.y >= pc.height) return;
     uint idx = p.y * pc.width + p.x;
     uint plane = pc.width * pc.height;
-    vec3 diffuse = pc.from_bounce != 0u ? hfgi_bounce[idx].rgb : hfgi_shade[plane + idx].rgb;
-    vec3 glossy = pc.from_bounce != 0u ? hfgi_bounce[plane + idx].rgb : hfgi_shade[4u * plane + idx].rgb;
+    vec3 diffuse = pc.from_bounce != 0u ? hfgi_bounce[idx].rgb : hfgi_shade[HFGI_PLANE_DIRECT * plane + idx].rgb;
+    vec3 glossy = pc.from_bounce != 0u ? hfgi_bounce[plane + idx].rgb : hfgi_shade[HFGI_PLANE_GLOSSY_DIRECT * plane + idx].rgb;
     vec3 c = pc.vector != 0u ? diffuse : diffuse + glossy;
     for (uint ch = 0u; ch < 3u; ++ch) hfgi_radiance_levels[ch * pc.channel_stride + idx] = c[ch];
     if (pc.vector != 0u) {

@@ -14,7 +14,7 @@
 //   SH mode:     V_k = ∫_open y_k dω (direct, .x) or U_k = ∫_blocked L_hit y_k dω (indirect, rgb).
 // The host finishes the shading in f64 (ρ/π, L ⊛ V, clamped-cosine ZH).
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const int HFGI_NODES = 16;
 // Fixed for a reference run (frame::truth: the push constants' wrap, march and sh_visibility):
@@ -29,7 +29,7 @@ layout(std430, binding = 0) readonly buffer Heights { float hfgi_h[]; };       /
 layout(std430, binding = 1) readonly buffer Light { vec4 hfgi_light[]; };      // n² rgb
 layout(std430, binding = 2) readonly buffer Source { vec4 hfgi_source[]; };    // W×H rgb: L_{b-1}
 layout(std430, binding = 3) readonly buffer Gauss { vec2 hfgi_gauss[]; };      // nodes, weights on [-1, 1]
-layout(std430, binding = 4) readonly buffer Consts { float hfgi_klm[64]; };
+layout(std430, binding = 4) readonly buffer Consts { float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER]; };
 layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   // texel × n² (accumulated over azimuth chunks)
 layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // key-light azimuth samples (φ, weight)
 layout(push_constant) uniform Push { hfgi_TruthPush pc; };

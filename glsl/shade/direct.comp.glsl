@@ -12,7 +12,7 @@
 // planes and recomposes 0 and 3 from 1, 2, 4, 5, so direct and indirect may be updated on
 // different frames (amortised shading, §7).
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const int HFGI_INDIRECT = 0;
 layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (glossy vector pyramid)
@@ -24,12 +24,12 @@ layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };       
 layout(std430, binding = 3) readonly buffer Triple { uvec2 hfgi_triple[]; };     // (i | j<<8 | k<<16, γ bits)
 layout(std430, binding = 4) readonly buffer Albedo { vec4 hfgi_albedo[]; };      // per texel (albedo_map)
 layout(std430, binding = 5) readonly buffer Consts {
-    float hfgi_klm[64];
-    float hfgi_zh_diffuse[8]; // √(4π/(2l+1)) · clamped-cosine ZH
-    float hfgi_zh_glossy[8];  // √(4π/(2l+1)) · Phong ZH
+    float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER];
+    float hfgi_zh_diffuse[HFGI_MAX_SH_ORDER]; // √(4π/(2l+1)) · clamped-cosine ZH
+    float hfgi_zh_glossy[HFGI_MAX_SH_ORDER];  // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
-layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // 6 planes × W×H
+layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // HFGI_PLANES planes × W×H
 layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's diffuse, glossy planes
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
@@ -143,21 +143,24 @@ void main() {
     if (HFGI_STORE_T != 0) {
         for (int k = 0; k < HFGI_N2; ++k) hfgi_incident[idx * uint(HFGI_N2) + uint(k)] = vec4(hfgi_T[k], 0.0);
     }
+    // Plane indices: HFGI_PLANE_* (src/constants.rs, defined by build.rs).
+    uint at_direct = HFGI_PLANE_DIRECT * plane + idx, at_indirect = HFGI_PLANE_INDIRECT * plane + idx;
+    uint at_gd = HFGI_PLANE_GLOSSY_DIRECT * plane + idx, at_gi = HFGI_PLANE_GLOSSY_INDIRECT * plane + idx;
     if (HFGI_INDIRECT != 0) {
         // `direct` and `glossy` hold this bounce's diffuse and glossy exit radiance.
         hfgi_bounce[idx] = vec4(direct, 1.0); // the next bounce's radiance (§5.3)
         hfgi_bounce[plane + idx] = vec4(glossy, 1.0);
         if (pc.accumulate != 0u) {
-            direct += hfgi_out[2u * plane + idx].rgb;
-            glossy += hfgi_out[5u * plane + idx].rgb;
+            direct += hfgi_out[at_indirect].rgb;
+            glossy += hfgi_out[at_gi].rgb;
         }
-        hfgi_out[2u * plane + idx] = vec4(direct, 1.0);
-        hfgi_out[5u * plane + idx] = vec4(glossy, 1.0);
+        hfgi_out[at_indirect] = vec4(direct, 1.0);
+        hfgi_out[at_gi] = vec4(glossy, 1.0);
     } else {
-        hfgi_out[plane + idx] = vec4(direct, 1.0);
-        hfgi_out[4u * plane + idx] = vec4(glossy, 1.0);
+        hfgi_out[at_direct] = vec4(direct, 1.0);
+        hfgi_out[at_gd] = vec4(glossy, 1.0);
     }
-    vec3 g = hfgi_out[4u * plane + idx].rgb + hfgi_out[5u * plane + idx].rgb;
-    hfgi_out[3u * plane + idx] = vec4(g, 1.0);
-    hfgi_out[idx] = vec4(hfgi_out[plane + idx].rgb + hfgi_out[2u * plane + idx].rgb + g, 1.0);
+    vec3 g = hfgi_out[at_gd].rgb + hfgi_out[at_gi].rgb;
+    hfgi_out[HFGI_PLANE_GLOSSY * plane + idx] = vec4(g, 1.0);
+    hfgi_out[HFGI_PLANE_TOTAL * plane + idx] = vec4(hfgi_out[at_direct].rgb + hfgi_out[at_indirect].rgb + g, 1.0);
 }

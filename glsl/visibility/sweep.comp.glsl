@@ -9,7 +9,7 @@
 // slot 1 (the visibility pass adds them and takes the near field itself). The CPU twin, with
 // the full description, is src/reference/sweep.rs; both take the same steps.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 64) in;
+layout(local_size_x = HFGI_WORKGROUP_1D) in;
 // Static modes (frame::shared::static_modes: the push constants' stack_mode and flags; no wrap):
 // branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 0) const uint HFGI_STACK = 1u;

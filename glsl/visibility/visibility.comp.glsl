@@ -8,7 +8,7 @@
 // z-rotations of eq. 20–21 (built in f64 on the host). With HFGI_FLAG_SWEEP, ω_max comes from
 // the line sweep's horizons (binding 6, docs/direct.md §7) instead of the scan.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // pyramid levels n_v
 layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or 2n + 1 (legendre moments)

@@ -27,7 +27,7 @@
 // written to the other buffer (ping-pong); the caller's heights buffer receives
 // rest_level + scale * z^{n+1} at offset 0, row-major.
 #include "hfgi_shared.glsl"
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(std430, binding = 0) readonly buffer Src { vec2 hfgi_src[]; };  // (z^n, v^n)
 layout(std430, binding = 1) writeonly buffer Dst { vec2 hfgi_dst[]; }; // (z^{n+1}, v^{n+1})
 layout(std430, binding = 2) writeonly buffer Heights { float hfgi_heights_out[]; };

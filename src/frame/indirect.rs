@@ -31,8 +31,8 @@ use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
 
-pub const STAGE_SCAN: &str = "indirect.scan";
-pub const STAGE_SHADE: &str = "indirect.shade";
+pub const STAGE_SCAN: &str = super::stages::stage_name("indirect.scan");
+pub const STAGE_SHADE: &str = super::stages::stage_name("indirect.shade");
 
 pub struct IndirectPass {
     pub radiance: RadiancePyramid,
@@ -311,7 +311,11 @@ impl IndirectPass {
         // (docs/accuracy.md §4).
         let bound = if self.max.is_some() && probes > 0 { FLAG_MAX_BOUND } else { 0 };
         rec.scope(STAGE_SCAN, |ctx, cmd| {
-            let g = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
+            let g = [
+                groups(self.push.work_width, crate::constants::WORKGROUP),
+                groups(self.push.work_height, crate::constants::WORKGROUP),
+                1,
+            ];
             // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into U.
             for (i, (first, count)) in self.chunks[(bounce > 1) as usize].iter().enumerate() {
                 let flags = self.push.flags | bound | if i > 0 { FLAG_ACCUMULATE } else { 0 };
@@ -327,7 +331,8 @@ impl IndirectPass {
     pub fn record_shade(&self, rec: &mut Recorder, bounce: u32) {
         rec.scope(STAGE_SHADE, |ctx, cmd| {
             let push = ShadePush { accumulate: (bounce > 1) as u32, ..self.shade_push };
-            let g = [groups(push.width, 8), groups(push.height, 8), 1];
+            let g =
+                [groups(push.width, crate::constants::WORKGROUP), groups(push.height, crate::constants::WORKGROUP), 1];
             self.shade.dispatch(ctx, cmd, self.shade_set, bytemuck::bytes_of(&push), g);
             barrier::compute_to_compute(ctx, cmd);
         });

@@ -12,6 +12,7 @@ pub mod radiance;
 pub mod renderer;
 pub mod shade;
 pub mod shared;
+pub mod stages;
 pub mod sweep;
 pub mod transfer;
 pub mod truth;
@@ -20,5 +21,6 @@ pub mod visibility;
 pub mod water;
 
 pub use live::RendererOptions;
-pub use plan::{Changes, FrameState, Pending, Plan, PlannedPass, PlannedStage, Planner, Stage};
+pub use plan::{Changes, FrameState, Pending, Plan, PlannedPass, PlannedStage, Planner};
 pub use renderer::{Renderer, RendererStats, ShadingLayers};
+pub use stages::{Stage, StageInfo, STAGES};

@@ -28,55 +28,13 @@
 
 use std::fmt;
 
-use super::indirect::{STAGE_SCAN, STAGE_SHADE};
-use super::pyramid::{PyramidLayout, STAGE_DECIMATE, STAGE_SYNTHESIZE};
-use super::pyramid_max::{why_no_max_bound, STAGE_MAX};
-use super::radiance::{STAGE_DECIMATE as RAD_DECIMATE, STAGE_GATHER, STAGE_SYNTHESIZE as RAD_SYNTHESIZE};
+use super::pyramid::PyramidLayout;
+use super::pyramid_max::why_no_max_bound;
 use super::renderer::{needs_indirect, vector_pyramid};
-use super::shade::STAGE_DIRECT;
-use super::visibility::{has_environment, STAGE_ENVIRONMENT, STAGE_KEY_LIGHTS};
+use super::visibility::has_environment;
 use crate::scene::model::{Albedo, GlossyPyramid, PyramidMode, Scene};
 
-/// Stage name of the live inputs' buffer updates ([`Stage::InputsUpdate`]).
-pub const STAGE_INPUTS: &str = "inputs.update";
-
-/// One stage of a frame; the indirect stages carry their bounce (1-based).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// `vkCmdUpdateBuffer` of the live inputs' new data (lights, material) into hfgi's buffers.
-    InputsUpdate,
-    PyramidDecimate,
-    PyramidSynthesize,
-    PyramidMax,
-    VisibilityEnvironment,
-    VisibilityKeyLights,
-    ShadeDirect,
-    RadianceGather(u32),
-    RadianceDecimate(u32),
-    RadianceSynthesize(u32),
-    IndirectScan(u32),
-    IndirectShade(u32),
-}
-
-impl Stage {
-    /// The scope name the stage records (timestamps, debug labels, `Recorder::stages`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Stage::InputsUpdate => STAGE_INPUTS,
-            Stage::PyramidDecimate => STAGE_DECIMATE,
-            Stage::PyramidSynthesize => STAGE_SYNTHESIZE,
-            Stage::PyramidMax => STAGE_MAX,
-            Stage::VisibilityEnvironment => STAGE_ENVIRONMENT,
-            Stage::VisibilityKeyLights => STAGE_KEY_LIGHTS,
-            Stage::ShadeDirect => STAGE_DIRECT,
-            Stage::RadianceGather(_) => STAGE_GATHER,
-            Stage::RadianceDecimate(_) => RAD_DECIMATE,
-            Stage::RadianceSynthesize(_) => RAD_SYNTHESIZE,
-            Stage::IndirectScan(_) => STAGE_SCAN,
-            Stage::IndirectShade(_) => STAGE_SHADE,
-        }
-    }
-}
+pub use super::stages::{Stage, StageInfo, STAGES, STAGE_INPUTS};
 
 /// What the planner needs to know about the frame about to be recorded.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -22,71 +22,17 @@ use gpu_allocator::MemoryLocation;
 
 use super::shared::{GpuLevel, PyramidPush};
 use crate::error::{Error, Result};
+pub use crate::rules::layout::PyramidLayout;
 use crate::scene::HeightField;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
 
 /// Stage names (timestamp scopes and debug labels).
-pub const STAGE_DECIMATE: &str = "pyramid.decimate";
-pub const STAGE_SYNTHESIZE: &str = "pyramid.synthesize";
+pub const STAGE_DECIMATE: &str = super::stages::stage_name("pyramid.decimate");
+pub const STAGE_SYNTHESIZE: &str = super::stages::stage_name("pyramid.synthesize");
 
 pub use crate::scene::model::PyramidMode;
-
-/// Sizes and buffer offsets of every level.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PyramidLayout {
-    /// Level step `k_v`: levels per halving of the resolution.
-    pub k_v: u32,
-    /// Level `i`: width, height and offset (in floats) in the levels buffer.
-    pub levels: Vec<GpuLevel>,
-    /// Total floats of all levels.
-    pub total: u64,
-}
-
-impl PyramidLayout {
-    /// The layout for an `width × height` field with level step `k_v ≥ 1`.
-    pub fn new(width: usize, height: usize, k_v: u32) -> Result<Self> {
-        if k_v == 0 || k_v > 64 {
-            return Err(Error::param("level step k_v", k_v, "an integer in 1..=64"));
-        }
-        if width < 2 || height < 2 {
-            return Err(Error::param("pyramid size", format!("{width}×{height}"), "at least 2×2"));
-        }
-        let n = width.max(height) as f64;
-        let n_v = (k_v as f64 * n.log2() + 1e-9).floor() as usize + 1;
-        let mut levels = Vec::with_capacity(n_v);
-        let mut offset = 0u64;
-        for i in 0..n_v {
-            let f = 2f64.powf(-(i as f64) / k_v as f64);
-            let (w, h) = if i == 0 {
-                (width, height)
-            } else {
-                (((width as f64 * f).round() as usize).max(1), ((height as f64 * f).round() as usize).max(1))
-            };
-            if offset > u32::MAX as u64 {
-                return Err(Error::param(
-                    "pyramid size",
-                    format!("{width}×{height}"),
-                    "fewer than 2^32 samples in all levels",
-                ));
-            }
-            levels.push(GpuLevel { width: w as u32, height: h as u32, offset: offset as u32, source: 0, bias: 0.0 });
-            offset += (w * h) as u64;
-        }
-        Ok(Self { k_v, levels, total: offset })
-    }
-
-    /// Number of levels `n_v`.
-    pub fn count(&self) -> usize {
-        self.levels.len()
-    }
-
-    /// Step `τ_i = 2^(−(n_v−1−i)/k_v)` of eq. 14, in units of the domain.
-    pub fn tau(&self, i: usize) -> f64 {
-        2f64.powf(-((self.count() - 1 - i) as f64) / self.k_v as f64)
-    }
-}
 
 /// What a pyramid holds: its channel count, the `source` id its table entries carry
 /// (`hfgi_Level.source`) and its stage names.
@@ -399,7 +345,11 @@ impl HeightPyramid {
                     cmd,
                     self.decimate_set,
                     bytemuck::bytes_of(&push),
-                    [groups(l.width, 8), groups(l.height, 8), channels],
+                    [
+                        groups(l.width, crate::constants::WORKGROUP),
+                        groups(l.height, crate::constants::WORKGROUP),
+                        channels,
+                    ],
                 );
                 barrier::compute_to_compute(ctx, cmd);
             }
@@ -420,7 +370,7 @@ impl HeightPyramid {
                     cmd,
                     self.synthesize_set,
                     bytemuck::bytes_of(&push),
-                    [groups(ww, 8), groups(wh, 8), n * channels],
+                    [groups(ww, crate::constants::WORKGROUP), groups(wh, crate::constants::WORKGROUP), n * channels],
                 );
                 barrier::compute_to_compute(ctx, cmd);
             });
@@ -535,7 +485,13 @@ impl HeightPyramid {
             };
             ctx.submit_and_wait(|cmd| {
                 barrier::compute_to_compute(ctx, cmd);
-                p.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), [groups(q.len() as u32, 64), 1, 1]);
+                p.dispatch(
+                    ctx,
+                    cmd,
+                    set,
+                    bytemuck::bytes_of(&push),
+                    [groups(q.len() as u32, crate::constants::WORKGROUP_1D), 1, 1],
+                );
                 Ok(())
             })?;
             memory::download_f32(ctx, &rb, 0, q.len() as u64)

@@ -21,7 +21,7 @@ use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
 
-pub const STAGE_MAX: &str = "pyramid.max";
+pub const STAGE_MAX: &str = super::stages::stage_name("pyramid.max");
 
 /// Whether the indirect scan of `scene` reads the max pyramid: it has radial probes (the bound
 /// saves probes; without them it costs more than it saves, docs/accuracy.md §4), level 0 is the
@@ -86,7 +86,8 @@ impl MaxPyramid {
             let (w, h) = self.layout.n0;
             for (level, &(lw, lh, _)) in self.layout.levels.iter().enumerate() {
                 let push = PyramidPush { level: level as u32, wrap: 0, out_width: w as u32, out_height: h as u32 };
-                let g = [groups(lw as u32, 8), groups(lh as u32, 8), 1];
+                let g =
+                    [groups(lw as u32, crate::constants::WORKGROUP), groups(lh as u32, crate::constants::WORKGROUP), 1];
                 self.pipeline.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);
                 barrier::compute_to_compute(ctx, cmd);
             }

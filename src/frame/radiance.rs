@@ -19,9 +19,9 @@ use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, Buffer, ComputePipeline, Context, Recorder};
 
-pub const STAGE_GATHER: &str = "radiance.gather";
-pub const STAGE_DECIMATE: &str = "radiance.decimate";
-pub const STAGE_SYNTHESIZE: &str = "radiance.synthesize";
+pub const STAGE_GATHER: &str = super::stages::stage_name("radiance.gather");
+pub const STAGE_DECIMATE: &str = super::stages::stage_name("radiance.decimate");
+pub const STAGE_SYNTHESIZE: &str = super::stages::stage_name("radiance.synthesize");
 
 /// The radiance pyramid kind: `channels` channels, `source = 1`.
 pub fn radiance_kind(channels: u32) -> PyramidKind {
@@ -117,7 +117,8 @@ impl RadiancePyramid {
     pub fn record_gather(&self, rec: &mut Recorder, bounce: u32) {
         rec.scope(STAGE_GATHER, |ctx, cmd| {
             let push = GatherPush { from_bounce: (bounce > 1) as u32, ..self.push };
-            let g = [groups(push.width, 8), groups(push.height, 8), 1];
+            let g =
+                [groups(push.width, crate::constants::WORKGROUP), groups(push.height, crate::constants::WORKGROUP), 1];
             self.gather.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);
             barrier::compute_to_compute(ctx, cmd);
         });

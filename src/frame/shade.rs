@@ -16,60 +16,38 @@ use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
 use super::shared::ShadePush;
-use super::visibility::{light_sets, SetKind, VisibilityPass};
+use super::visibility::VisibilityPass;
+use crate::constants;
 use crate::error::Result;
 use crate::math::azimuth::AzimuthSet;
 use crate::math::{sh, triple, zh};
+pub use crate::rules::lighting::{cap_solid_angle, set_lighting, window_solid_angle};
+use crate::rules::lighting::{light_sets, SetKind};
 use crate::scene::model::{Albedo, Scene};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
 
-pub const STAGE_DIRECT: &str = "shade.direct";
+pub const STAGE_DIRECT: &str = super::stages::stage_name("shade.direct");
 
-pub const LAYER_TOTAL: usize = 0;
-pub const LAYER_DIRECT: usize = 1;
-pub const LAYER_INDIRECT: usize = 2;
-pub const LAYER_GLOSSY: usize = 3;
+// The planes come from src/constants.rs, which the shaders see as HFGI_PLANE_*.
+pub const LAYER_TOTAL: usize = constants::PLANE_TOTAL as usize;
+pub const LAYER_DIRECT: usize = constants::PLANE_DIRECT as usize;
+pub const LAYER_INDIRECT: usize = constants::PLANE_INDIRECT as usize;
+pub const LAYER_GLOSSY: usize = constants::PLANE_GLOSSY as usize;
 /// Internal planes: glossy exit radiance of the direct light and of the indirect bounces
 /// (their sum is [`LAYER_GLOSSY`]).
-pub const PLANE_GLOSSY_DIRECT: usize = 4;
-pub const PLANE_GLOSSY_INDIRECT: usize = 5;
+pub const PLANE_GLOSSY_DIRECT: usize = constants::PLANE_GLOSSY_DIRECT as usize;
+pub const PLANE_GLOSSY_INDIRECT: usize = constants::PLANE_GLOSSY_INDIRECT as usize;
 /// Planes in the shading buffer.
-pub const PLANES: usize = 6;
+pub const PLANES: usize = constants::PLANES as usize;
 /// Layer names as exported (CONVENTIONS.md): the total is the default layer.
 pub const LAYER_NAMES: [&str; 4] = ["", "direct", "indirect", "glossy"];
 
-/// SH lighting of one light set, `n²` RGB coefficients (docs/direct.md §5): the environment's
-/// coefficients, or a key light's power spread uniformly over its azimuth/elevation window.
-pub fn set_lighting(scene: &Scene, kind: SetKind, set: &AzimuthSet) -> Vec<[f64; 3]> {
-    let n = scene.gi.sh_order;
-    match kind {
-        SetKind::Environment => (0..n * n).map(|k| scene.environment.sh.get(k).copied().unwrap_or([0.0; 3])).collect(),
-        SetKind::KeyLight(i) => {
-            let l = &scene.key_lights[i];
-            let scale = cap_solid_angle(l.angular_radius) / window_solid_angle(set) * (4.0 * PI).sqrt();
-            let mut c = vec![[0.0; 3]; n * n];
-            c[0] = [l.radiance[0] * scale, l.radiance[1] * scale, l.radiance[2] * scale];
-            c
-        }
-    }
-}
-
-/// Solid angle of a cap of angular radius `alpha`: `2π(1 − cos α)`.
-pub fn cap_solid_angle(alpha: f64) -> f64 {
-    2.0 * PI * (1.0 - alpha.cos())
-}
-
-/// Solid angle of a set's azimuth × elevation window.
-pub fn window_solid_angle(set: &AzimuthSet) -> f64 {
-    let span: f64 = set.wedges.iter().map(|w| w.width).sum();
-    span * (set.hi.sin() - set.lo.sin())
-}
-
 /// The constants block of the shader: K_l^m table, rotated-ZH band factors, triple count.
 pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
-    let mut klm = [0f32; 64];
+    const N: usize = constants::MAX_SH_ORDER as usize;
+    let mut klm = [0f32; N * N];
     for l in 0..n {
         for m in 0..=l {
             let k = sh::k_lm(l, m) * if m > 0 { std::f64::consts::SQRT_2 } else { 1.0 };
@@ -77,8 +55,8 @@ pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> 
         }
     }
     let cc = zh::clamped_cosine(n);
-    let mut diffuse = [0f32; 8];
-    let mut glossy = [0f32; 8];
+    let mut diffuse = [0f32; N];
+    let mut glossy = [0f32; N];
     for l in 0..n {
         let band = (4.0 * PI / (2 * l + 1) as f64).sqrt();
         diffuse[l] = (band * cc[l]) as f32;
@@ -299,7 +277,11 @@ impl ShadePass {
 
     pub fn record(&self, rec: &mut Recorder) {
         rec.scope(STAGE_DIRECT, |ctx, cmd| {
-            let g = [groups(self.push.width, 8), groups(self.push.height, 8), 1];
+            let g = [
+                groups(self.push.width, crate::constants::WORKGROUP),
+                groups(self.push.height, crate::constants::WORKGROUP),
+                1,
+            ];
             self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&self.push), g);
             barrier::compute_to_compute(ctx, cmd);
         });

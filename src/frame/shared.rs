@@ -3,20 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// `hfgi_Level`: one pyramid level inside the levels buffer (offset in floats).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuLevel {
-    pub width: u32,
-    pub height: u32,
-    pub offset: u32,
-    /// Buffer the level lives in: 0 heights, 1 radiance (`hfgi_Level.source`).
-    pub source: u32,
-    /// Subtracted from every sample read from this level (`hfgi_fetch`): the height origin
-    /// `z0` on level 0 of a renderer's height pyramid ([`crate::frame::pyramid::HeightPyramid::set_origin`],
-    /// docs/pyramid.md), 0 everywhere else.
-    pub bias: f32,
-}
+pub use crate::rules::layout::GpuLevel;
 
 /// `hfgi_PyramidPush`: push constants of the pyramid passes.
 #[repr(C)]

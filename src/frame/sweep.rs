@@ -151,7 +151,7 @@ impl SweepPass {
         let mut line = 0;
         while line < self.plan.lines {
             let push = SweepPush { sample_offset: first, sample_count: count, line_first: line, ..self.push };
-            let g = [groups(self.plan.line_batch, 64), count, 1];
+            let g = [groups(self.plan.line_batch, crate::constants::WORKGROUP_1D), count, 1];
             self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&push), g);
             barrier::compute_to_compute(ctx, cmd);
             line += self.plan.line_batch;

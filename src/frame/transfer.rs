@@ -11,9 +11,9 @@ use crate::scene::HeightField;
 use crate::vk::{barrier, Recorder, StagingRing};
 
 /// Stage name of [`Renderer::record_heights_upload`].
-pub const STAGE_HEIGHTS_UPLOAD: &str = "heights.upload";
+pub const STAGE_HEIGHTS_UPLOAD: &str = super::stages::stage_name("heights.upload");
 /// Stage name of [`Renderer::record_read_layers`].
-pub const STAGE_READBACK: &str = "shade.readback";
+pub const STAGE_READBACK: &str = super::stages::stage_name("shade.readback");
 
 /// The planes [`Renderer::record_read_layers`] copies, in [`ShadingLayers`] order.
 const PLANES: [usize; 5] = [LAYER_TOTAL, LAYER_DIRECT, LAYER_INDIRECT, LAYER_GLOSSY, PLANE_GLOSSY_INDIRECT];

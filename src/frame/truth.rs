@@ -28,7 +28,7 @@ use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder, StageTimer};
 
-pub const STAGE_TRUTH: &str = "reference.truth";
+pub const STAGE_TRUTH: &str = super::stages::stage_name("reference.truth");
 
 /// Loop iterations one invocation may run per dispatch. lavapipe silently ends an invocation's
 /// loops after 65535 iterations in total (measured: a 16² flat field lost 45% of its light at
@@ -246,7 +246,11 @@ impl Passes<'_> {
                     barrier::transfer_to_compute(ctx, cmd);
                     for push in &pushes {
                         let push = TruthPush { row_offset: row, rows, ..*push };
-                        let g = [groups(w as u32, 8), groups(rows, 8), 1];
+                        let g = [
+                            groups(w as u32, crate::constants::WORKGROUP),
+                            groups(rows, crate::constants::WORKGROUP),
+                            1,
+                        ];
                         pipe.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), g);
                         barrier::compute_to_compute(ctx, cmd);
                     }

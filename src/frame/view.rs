@@ -51,7 +51,7 @@ use crate::vk::graphics::{self, GraphicsDesc, RenderTargets, TargetChoice};
 use crate::vk::pipeline::Bind;
 use crate::vk::{memory, Buffer, Context, DescriptorKind, GraphicsPipeline, Image, Recorder};
 
-pub const STAGE_RASTER: &str = "view.raster";
+pub const STAGE_RASTER: &str = super::stages::stage_name("view.raster");
 
 /// Highest MSAA sample count the pass asks for.
 pub const MAX_SAMPLES: u32 = 8;

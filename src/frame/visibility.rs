@@ -13,40 +13,16 @@ use super::pyramid::HeightPyramid;
 use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, FLAG_SWEEP, VISIBILITY_LOOP_BUDGET};
 use super::sweep::{SweepPass, SweepPlan};
 use crate::error::Result;
-use crate::math::azimuth::{self, AzimuthSet};
+use crate::math::azimuth::AzimuthSet;
 use crate::math::elevation;
+pub use crate::rules::lighting::{has_environment, light_sets, SetKind};
 use crate::scene::model::{PyramidMode, Scene, VisibilityMethod};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
 
-pub const STAGE_ENVIRONMENT: &str = "visibility.environment";
-pub const STAGE_KEY_LIGHTS: &str = "visibility.key_lights";
-
-/// Which light a set of azimuth samples belongs to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SetKind {
-    Environment,
-    KeyLight(usize),
-}
-
-/// Whether the scene has an environment light (some SH coefficient is non-zero).
-pub fn has_environment(scene: &Scene) -> bool {
-    scene.environment.sh.iter().any(|c| c.iter().any(|v| *v != 0.0))
-}
-
-/// The light sets of a scene with their azimuth samples (docs/direct.md §4).
-pub fn light_sets(scene: &Scene) -> Vec<(SetKind, AzimuthSet)> {
-    let gi = &scene.gi;
-    let mut sets = Vec::new();
-    if has_environment(scene) {
-        sets.push((SetKind::Environment, azimuth::environment_set(gi.azimuths as usize, gi.interpolation)));
-    }
-    for (i, l) in scene.key_lights.iter().enumerate() {
-        sets.push((SetKind::KeyLight(i), azimuth::key_light_set(l, gi.key_light_azimuths as usize, gi.interpolation)));
-    }
-    sets
-}
+pub const STAGE_ENVIRONMENT: &str = super::stages::stage_name("visibility.environment");
+pub const STAGE_KEY_LIGHTS: &str = super::stages::stage_name("visibility.key_lights");
 
 pub(crate) struct SetRange {
     kind: SetKind,
@@ -261,7 +237,11 @@ impl VisibilityPass {
     pub fn record_sets(&self, rec: &mut Recorder, environment: bool) {
         let receivers = self.push.work_width * self.push.work_height;
         let n2 = (self.n * self.n) as u32;
-        let groups = [groups(self.push.work_width, 8), groups(self.push.work_height, 8), 1];
+        let groups = [
+            groups(self.push.work_width, crate::constants::WORKGROUP),
+            groups(self.push.work_height, crate::constants::WORKGROUP),
+            1,
+        ];
         let stage = if environment { STAGE_ENVIRONMENT } else { STAGE_KEY_LIGHTS };
         let chosen: Vec<(usize, &SetRange)> =
             self.sets.iter().enumerate().filter(|(_, s)| (s.kind == SetKind::Environment) == environment).collect();
@@ -269,15 +249,19 @@ impl VisibilityPass {
             return;
         }
         rec.scope(stage, |ctx, cmd| {
+            let mut swept = false;
             for (i, s) in &chosen {
                 // With the sweep, chunks of azimuths whose horizons fit its buffer; else one.
                 let sweep_chunk = self.sweep.as_ref().map_or(s.count, |w| w.plan().chunk);
-                for (h, (hfirst, hcount)) in azimuth_chunks(s.count, 1, sweep_chunk).into_iter().enumerate() {
+                for (hfirst, hcount) in azimuth_chunks(s.count, 1, sweep_chunk) {
                     if let Some(w) = &self.sweep {
-                        if h > 0 {
-                            barrier::compute_to_compute(ctx, cmd); // the projection read the horizons
+                        if swept {
+                            // The previous chunk's or set's projection read the horizons
+                            // (write-after-read, found by synchronization validation).
+                            barrier::compute_to_compute(ctx, cmd);
                         }
                         w.record(ctx, cmd, s.first + hfirst, hcount);
+                        swept = true;
                     }
                     // Azimuth chunks against lavapipe's loop limit; later ones accumulate into V.
                     for (c, (first, count)) in

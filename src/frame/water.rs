@@ -36,7 +36,7 @@ use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
 
 /// Stage name (timestamp scope and debug label).
-pub const STAGE_STEP: &str = "water.step";
+pub const STAGE_STEP: &str = super::stages::stage_name("water.step");
 
 /// Distinct heights buffers one simulation can write to (a descriptor-set pair is cached for
 /// each).
@@ -191,7 +191,13 @@ impl WaterSim {
             // heights buffer (an upload by transfer, the previous frame's pyramid by compute).
             barrier::transfer_to_compute(ctx, cmd);
             barrier::compute_to_compute(ctx, cmd);
-            pipeline.dispatch(ctx, cmd, set, bytemuck::bytes_of(&push), [groups(w, 8), groups(h, 8), 1]);
+            pipeline.dispatch(
+                ctx,
+                cmd,
+                set,
+                bytemuck::bytes_of(&push),
+                [groups(w, crate::constants::WORKGROUP), groups(h, crate::constants::WORKGROUP), 1],
+            );
             // The new heights and state, for the pyramid (or the next step).
             barrier::compute_to_compute(ctx, cmd);
         });

@@ -9,11 +9,10 @@ use glam::DVec3;
 
 use super::pyramid::{rescale, CpuPyramid};
 use crate::error::Result;
-use crate::frame::shade::set_lighting;
-use crate::frame::visibility::{light_sets, SetKind};
 use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
 use crate::math::Mat;
 use crate::math::{elevation, triple, zh};
+use crate::rules::lighting::{light_sets, set_lighting, SetKind};
 use crate::scene::model::{Albedo, ElevationBasis, GiSettings, Horizon, Level0, PyramidMode, Scene, VisibilityMethod};
 
 /// Tolerance (texels) of the domain test of docs/direct.md §2.
@@ -356,7 +355,7 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     let (w, h) = (scene.field.width(), scene.field.height());
     let work = gi.working_size(w, h);
     // Heights relative to the renderer's origin z0 (docs/pyramid.md, "Origin").
-    let z0 = crate::frame::renderer::height_origin(&scene.field);
+    let z0 = crate::rules::scene::height_origin(&scene.field);
     let stack = gi.pyramid == PyramidMode::Stack;
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);

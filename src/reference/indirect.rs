@@ -186,7 +186,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let (w, h) = (scene.field.width(), scene.field.height());
     let work = direct.work;
     let stack = gi.pyramid == PyramidMode::Stack;
-    let z0 = crate::frame::renderer::height_origin(&scene.field);
+    let z0 = crate::rules::scene::height_origin(&scene.field);
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let mut scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let tangent = gi.omega_min == OmegaMin::Tangent;
@@ -199,7 +199,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
 
     // Bounce 0: the direct light. Scalar pyramid: diffuse + glossy toward the camera; vector
     // pyramid: diffuse + the incident SH radiance T (true pyramid always).
-    let vector = crate::frame::renderer::vector_pyramid(scene);
+    let vector = crate::rules::scene::vector_pyramid(scene);
     let add = |d: &[[f64; 3]], g: &[[f64; 3]]| -> Vec<[f64; 3]> {
         d.iter().zip(g).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect()
     };

@@ -3,8 +3,8 @@
 //! Sigg–Hadwiger form is checked against an independent formulation of the same filter.
 
 use crate::error::Result;
-use crate::frame::pyramid::PyramidLayout;
 use crate::math::bspline;
+use crate::rules::layout::PyramidLayout;
 use crate::scene::HeightField;
 
 /// All levels (and optionally the synthesized stack) in f64.

@@ -41,8 +41,8 @@ pub const SKY_SUN_AZIMUTH_DEG: f64 = 200.0;
 ///
 /// The sum is separable: each row is first reduced to its azimuthal Fourier sums
 /// `Σ_u L·cos(mφ_u)`, `Σ_u L·sin(mφ_u)` for `m < n`, so the cost is `O(w·h·n)`. With
-/// `progress`, an `indicatif` progress bar counts rows on stderr (the scene loader asks for
-/// one when the map has more than 256×128 pixels and stderr is a terminal).
+/// `progress`, each row is reported to the progress hook ([`crate::progress`]; the scene
+/// loader asks for it when the map has more than 256×128 pixels).
 ///
 /// Accuracy: the solid angle `sinθ·(π/h)·(2π/w)` makes this the midpoint rule in θ (and φ),
 /// so a constant map of 1 gives `c_0 = √(4π)·(1 + ε)` with `ε = (π/2h)/sin(π/2h) − 1`
@@ -72,15 +72,6 @@ pub fn project_equirect(width: usize, height: usize, rgb: &[[f32; 3]], n: usize,
             sin_tab[m * width + u] = s;
         }
     }
-    let bar = progress.then(|| {
-        let bar = indicatif::ProgressBar::new(height as u64);
-        if let Ok(style) = indicatif::ProgressStyle::with_template(
-            "projecting environment map to SH {bar:40} {pos}/{len} rows ({eta} left)",
-        ) {
-            bar.set_style(style);
-        }
-        bar
-    });
     let mut fc = vec![[0.0f64; 3]; n];
     let mut fs = vec![[0.0f64; 3]; n];
     for v in 0..height {
@@ -116,15 +107,15 @@ pub fn project_equirect(width: usize, height: usize, rgb: &[[f32; 3]], n: usize,
                 }
             }
         }
-        if let Some(bar) = &bar {
-            bar.inc(1);
+        if progress {
+            crate::progress::report(PROJECTION_TASK, v as u64 + 1, height as u64);
         }
-    }
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
     }
     out
 }
+
+/// The task name [`project_equirect`] reports progress under.
+pub const PROJECTION_TASK: &str = "projecting environment map to SH";
 
 /// Reads an equirectangular RGB environment map from an OpenEXR file: the channels `R`, `G`,
 /// `B` of the default layer (or, if it has none, of the first layer that has all three), f16,

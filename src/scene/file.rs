@@ -68,7 +68,8 @@ pub const DEFAULT_EXPONENT: f64 = 32.0;
 pub const MAX_CAMERA_SIDE: u32 = 8192;
 /// Largest number of environment SH coefficients (order 8).
 pub const MAX_ENV_COEFFS: usize = 64;
-/// Environment maps with more pixels than this get a progress bar (when stderr is a terminal).
+/// Environment maps with more pixels than this report their projection's progress
+/// ([`crate::progress`]; the CLI draws a bar when stderr is a terminal).
 pub const ENVMAP_PROGRESS_PIXELS: usize = 256 * 128;
 
 /// Name used in messages for the scene of [`default_scene`].
@@ -852,8 +853,7 @@ impl Ctx<'_> {
         } else if let Some(map) = raw.map {
             let path = self.resolve(&map);
             let (w, h, rgb) = envmap::load_equirect_exr(&path).map_err(|e| self.wrap("environment.map", e))?;
-            use std::io::IsTerminal;
-            let progress = w * h > ENVMAP_PROGRESS_PIXELS && std::io::stderr().is_terminal();
+            let progress = w * h > ENVMAP_PROGRESS_PIXELS;
             envmap::project_equirect(w, h, &rgb, envmap::PRESET_ORDER, progress)
         } else {
             let name = raw.preset.as_deref().unwrap_or("sky");

@@ -680,7 +680,7 @@ impl GiSettings {
                 Ok(())
             }
         };
-        check("gi.sh_order", u32::try_from(self.sh_order).unwrap_or(u32::MAX), 2, 8)?;
+        check("gi.sh_order", u32::try_from(self.sh_order).unwrap_or(u32::MAX), 2, crate::constants::MAX_SH_ORDER)?;
         check("gi.azimuths", self.azimuths, 4, 256)?;
         check("gi.key_light_azimuths", self.key_light_azimuths, 2, 64)?;
         check("gi.level_step", self.level_step, 1, 32)?;

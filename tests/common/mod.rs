@@ -13,6 +13,20 @@ use std::sync::{Arc, Mutex};
 
 use hfgi::vk::{Context, ContextOptions, Recorder};
 
+/// The `hfgi` binary (package `hfgi-cli`, a default workspace member, so `cargo test` at the
+/// root builds it before running the tests): beside the test executable's `deps/` folder, or
+/// `HFGI_EXE`. A test run with `-p hfgi` alone may see a stale binary.
+pub fn hfgi_exe() -> std::path::PathBuf {
+    if let Some(p) = std::env::var_os("HFGI_EXE") {
+        return p.into();
+    }
+    let exe = std::env::current_exe().expect("the test executable's path");
+    let dir = exe.parent().and_then(|d| d.parent()).expect("the target directory");
+    let p = dir.join(format!("hfgi{}", std::env::consts::EXE_SUFFIX));
+    assert!(p.is_file(), "{} is missing: build the CLI (`cargo build -p hfgi-cli`)", p.display());
+    p
+}
+
 pub struct Gpu {
     ctx: Option<Context>,
     store: Arc<Mutex<Vec<String>>>,

@@ -45,8 +45,9 @@ fn collect(dir: &Path, root: &Path, out: &mut Vec<PathBuf>) -> Result<(), String
     Ok(())
 }
 
-/// Compiles every shader under `root`. Errors carry `file:line: message` from glslang.
-pub fn compile_tree(root: &Path) -> Result<Vec<Compiled>, String> {
+/// Compiles every shader under `root`, each with the `(name, value)` macros of `defines`.
+/// Errors carry `file:line: message` from glslang.
+pub fn compile_tree(root: &Path, defines: &[(String, String)]) -> Result<Vec<Compiled>, String> {
     let mut files = Vec::new();
     collect(root, root, &mut files)?;
     let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
@@ -61,6 +62,9 @@ pub fn compile_tree(root: &Path) -> Result<Vec<Compiled>, String> {
         opts.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
         opts.set_optimization_level(shaderc::OptimizationLevel::Performance);
         opts.set_generate_debug_info();
+        for (name, value) in defines {
+            opts.add_macro_definition(name, Some(value));
+        }
         let inc = inc_dir.clone();
         opts.set_include_callback(move |name, _ty, from, _depth| {
             let from_dir = Path::new(from).parent().map(Path::to_path_buf).unwrap_or_default();

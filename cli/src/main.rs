@@ -158,6 +158,10 @@ struct PlanArgs {
     /// List every buffer of the renderer's estimate, largest first (name and MiB).
     #[arg(long)]
     buffers: bool,
+    /// Print the stage table first: every stage's name, the pass that records it and its rule
+    /// (src/frame/stages.rs, the table the planner and the recorder read).
+    #[arg(long)]
+    stages: bool,
 }
 
 pub(crate) fn context(d: &DeviceArgs) -> Result<Context> {
@@ -387,6 +391,9 @@ fn plan(a: PlanArgs) -> Result<()> {
         scene.gi.bounces, scene.gi.amortize
     );
     text += &format!("resolved knobs: {}\n", scene.gi.describe());
+    if a.stages {
+        text += &hfgi::frame::stages::table_text();
+    }
     let planner = hfgi::frame::Planner::new(&scene);
     for f in 0..u64::from(a.frames) {
         let p = planner.plan(&hfgi::frame::FrameState {
@@ -522,8 +529,36 @@ pub(crate) fn write_stdout(text: &str) -> Result<()> {
     out.write_all(text.as_bytes()).and_then(|()| out.flush()).context("writing to standard output")
 }
 
+/// The library's progress reports ([`hfgi::progress`]) as an indicatif bar on a terminal.
+fn install_progress_bar() {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() {
+        return;
+    }
+    let bar: std::sync::Mutex<Option<(String, indicatif::ProgressBar)>> = std::sync::Mutex::new(None);
+    hfgi::progress::set_hook(Some(Box::new(move |p: &hfgi::progress::Progress| {
+        let Ok(mut slot) = bar.lock() else { return };
+        if !slot.as_ref().is_some_and(|(task, _)| task == p.task) {
+            let b = indicatif::ProgressBar::new(p.total);
+            if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} {bar:40} {pos}/{len} ({eta} left)") {
+                b.set_style(style);
+            }
+            b.set_message(p.task.to_string());
+            *slot = Some((p.task.to_string(), b));
+        }
+        if let Some((_, b)) = slot.as_ref() {
+            b.set_position(p.done);
+            if p.done >= p.total {
+                b.finish_and_clear();
+                *slot = None;
+            }
+        }
+    })));
+}
+
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    install_progress_bar();
     let result = match cli.command {
         Command::Render(a) => render(a),
         Command::Animate(a) => animate::animate(a),

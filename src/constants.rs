@@ -1,0 +1,37 @@
+// Constants shared by the host code and the shaders (module docs: `pub mod constants` in
+// src/lib.rs). No `use`, no crate paths and no inner doc comments: `build.rs` `include!`s this
+// file on its own.
+
+/// Largest SH order `n` of the shaders' fixed arrays (`hfgi_klm[n²]`, the ZH band factors).
+pub const MAX_SH_ORDER: u32 = 8;
+/// Side of the 2D compute workgroups (`local_size_x = local_size_y`).
+pub const WORKGROUP: u32 = 8;
+/// Size of the 1D compute workgroups (the line sweep, the pyramid probe).
+pub const WORKGROUP_1D: u32 = 64;
+
+/// Planes of the shading buffer (`vec4` per texel, each `W × H`): the exported layers
+/// (CONVENTIONS.md) total, direct, indirect, glossy, then the glossy light of the direct light
+/// and of the bounces (their sum is the glossy layer).
+pub const PLANE_TOTAL: u32 = 0;
+pub const PLANE_DIRECT: u32 = 1;
+pub const PLANE_INDIRECT: u32 = 2;
+pub const PLANE_GLOSSY: u32 = 3;
+pub const PLANE_GLOSSY_DIRECT: u32 = 4;
+pub const PLANE_GLOSSY_INDIRECT: u32 = 5;
+/// Planes in the shading buffer.
+pub const PLANES: u32 = 6;
+
+/// `(name, value, unsigned)` of each constant the shaders see, as `#define HFGI_<name>
+/// <value>` (with a `u` suffix when `unsigned`: the plane indices multiply `uint`s).
+pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
+    ("MAX_SH_ORDER", MAX_SH_ORDER, false),
+    ("WORKGROUP", WORKGROUP, false),
+    ("WORKGROUP_1D", WORKGROUP_1D, false),
+    ("PLANE_TOTAL", PLANE_TOTAL, true),
+    ("PLANE_DIRECT", PLANE_DIRECT, true),
+    ("PLANE_INDIRECT", PLANE_INDIRECT, true),
+    ("PLANE_GLOSSY", PLANE_GLOSSY, true),
+    ("PLANE_GLOSSY_DIRECT", PLANE_GLOSSY_DIRECT, true),
+    ("PLANE_GLOSSY_INDIRECT", PLANE_GLOSSY_INDIRECT, true),
+    ("PLANES", PLANES, true),
+];
