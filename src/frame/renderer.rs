@@ -178,6 +178,15 @@ impl Renderer {
     /// Replaces the heights from the CPU (same size as the scene's field; waits for the upload).
     /// The next [`Renderer::record`] rebuilds the pyramid.
     pub fn update_heights(&mut self, ctx: &Context, field: &HeightField) -> Result<()> {
+        self.check_new_heights(field)?;
+        self.pyramid.upload(ctx, field)?;
+        self.pyramid.set_origin(ctx, height_origin(field))?;
+        self.heights_changed = true;
+        Ok(())
+    }
+
+    /// New heights for this renderer: its size, magnitudes within the limits.
+    pub(super) fn check_new_heights(&self, field: &HeightField) -> Result<()> {
         crate::scene::model::limits::check_heights(field)?;
         let l = self.pyramid.layout().levels[0];
         if (field.width(), field.height()) != (l.width as usize, l.height as usize) {
@@ -187,9 +196,6 @@ impl Renderer {
                 format!("{}×{} (the renderer's size; create a new Renderer to resize)", l.width, l.height),
             ));
         }
-        self.pyramid.upload(ctx, field)?;
-        self.pyramid.set_origin(ctx, height_origin(field))?;
-        self.heights_changed = true;
         Ok(())
     }
 

@@ -6,7 +6,7 @@ use ash::vk;
 
 use super::renderer::{height_origin, Renderer, ShadingLayers};
 use super::shade::{LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL, PLANE_GLOSSY_INDIRECT};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::scene::HeightField;
 use crate::vk::{barrier, Recorder, StagingRing};
 
@@ -69,15 +69,7 @@ impl Renderer {
         ring: &mut StagingRing,
         field: &HeightField,
     ) -> Result<()> {
-        crate::scene::model::limits::check_heights(field)?;
-        let l = self.pyramid.layout().levels[0];
-        if (field.width(), field.height()) != (l.width as usize, l.height as usize) {
-            return Err(Error::param(
-                "height field size",
-                format!("{}×{}", field.width(), field.height()),
-                format!("{}×{} (the renderer's size; create a new Renderer to resize)", l.width, l.height),
-            ));
-        }
+        self.check_new_heights(field)?;
         let offset = ring.push(bytemuck::cast_slice(field.data()))?;
         let table = self.pyramid.origin_table(height_origin(field))?;
         let (src, dst, len) = (ring.buffer().raw, self.pyramid.levels_buffer().raw, (field.data().len() * 4) as u64);
