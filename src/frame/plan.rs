@@ -36,6 +36,8 @@ use crate::scene::model::{Albedo, GlossyPyramid, PyramidMode, Scene};
 
 pub use super::stages::{Stage, StageInfo, STAGES, STAGE_INPUTS};
 
+mod passes;
+
 /// What the planner needs to know about the frame about to be recorded.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FrameState {
@@ -273,106 +275,6 @@ impl Planner {
         } else {
             None
         }
-    }
-
-    fn radiance_kind(&self) -> String {
-        if self.vector {
-            format!(
-                "glossy SH vector pyramid, {} channels (glossy material, gi.glossy_pyramid = \"vector\")",
-                self.channels
-            )
-        } else {
-            let why = if self.glossy_pyramid == GlossyPyramid::Vector {
-                " (gi.glossy_pyramid = \"vector\" asked for, but the material has no specular lobe)"
-            } else {
-                ""
-            };
-            format!("scalar RGB pyramid, 3 channels{why}, {} mode", self.mode)
-        }
-    }
-
-    /// The passes `Renderer::new` creates (and the ones it does not), with reasons.
-    pub fn passes(&self) -> Vec<PlannedPass> {
-        let (w, h) = self.size;
-        let (ww, wh) = self.work;
-        let storage = match self.mode {
-            PyramidMode::Stack => format!("stack mode: {} planes of {ww}×{wh}", self.levels),
-            PyramidMode::Pyramid => "pyramid mode: decimated levels only".into(),
-        };
-        let mut sets = Vec::new();
-        if self.environment {
-            sets.push("environment".to_string());
-        }
-        if self.key_lights > 0 {
-            sets.push(format!("{} key light{}", self.key_lights, plural(self.key_lights)));
-        }
-        let sets = if sets.is_empty() { "no lights: the direct light is black".into() } else { sets.join(", ") };
-        let mut passes = vec![
-            PlannedPass {
-                name: "HeightPyramid",
-                created: true,
-                reason: format!(
-                    "always: {w}×{h} heights, {} levels (k_v = {}), {storage}",
-                    self.levels, self.level_step
-                ),
-            },
-            PlannedPass {
-                name: "VisibilityPass",
-                created: true,
-                reason: format!(
-                    "always: {} light set{} ({sets})",
-                    self.light_sets(),
-                    plural(self.light_sets() as usize)
-                ),
-            },
-            PlannedPass {
-                name: "ShadePass",
-                created: true,
-                reason: "always: the shading texture (total, direct, indirect, glossy)".into(),
-            },
-        ];
-        match self.no_indirect() {
-            Some(why) => {
-                passes.push(PlannedPass { name: "IndirectPass", created: false, reason: why.clone() });
-                passes.push(PlannedPass { name: "RadiancePyramid", created: false, reason: "no IndirectPass".into() });
-            }
-            None => {
-                let reflects = match (self.albedo, self.specular) {
-                    (true, true) => "albedo and specular non-zero",
-                    (true, false) => "albedo non-zero",
-                    _ => "specular non-zero",
-                };
-                passes.push(PlannedPass {
-                    name: "IndirectPass",
-                    created: true,
-                    reason: format!("gi.bounces = {} and the surface reflects light ({reflects})", self.bounces),
-                });
-                passes.push(PlannedPass {
-                    name: "MaxPyramid",
-                    created: self.no_max_bound.is_none(),
-                    reason: match self.no_max_bound {
-                        None => "part of IndirectPass: level-0 maxima that bound the radial probes".into(),
-                        Some(why) => why.into(),
-                    },
-                });
-                passes.push(PlannedPass {
-                    name: "RadiancePyramid",
-                    created: true,
-                    reason: format!(
-                        "part of IndirectPass: {}{}, {} levels (k_u = {})",
-                        self.radiance_kind(),
-                        if self.vector { ", always a true pyramid" } else { "" },
-                        self.radiance_levels,
-                        self.radiance_level_step
-                    ),
-                });
-            }
-        }
-        passes
-    }
-
-    fn light_sets(&self) -> u32 {
-        self.environment as u32 + self.key_lights as u32
     }
 
     /// The stages of `frame`, in recording order, with reasons.
