@@ -13,9 +13,9 @@ use std::sync::{Arc, Mutex};
 
 use hfgi::vk::{Context, ContextOptions, Recorder};
 
-/// The `hfgi` binary (package `hfgi-cli`, a default workspace member, so `cargo test` at the
-/// root builds it before running the tests): beside the test executable's `deps/` folder, or
-/// `HFGI_EXE`. A test run with `-p hfgi` alone may see a stale binary.
+/// The `hfgi` binary (package `hfgi-cli`): beside the test executable's `deps/` folder, or
+/// `HFGI_EXE`. `cargo test` builds test harnesses, not this binary: `tools/test` runs `cargo
+/// build --bins` first; a bare `cargo test` may see a missing or stale binary.
 pub fn hfgi_exe() -> std::path::PathBuf {
     if let Some(p) = std::env::var_os("HFGI_EXE") {
         return p.into();
