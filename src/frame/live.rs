@@ -23,8 +23,8 @@ use super::renderer::{needs_indirect, vector_pyramid, Renderer};
 use super::shade::{self, light_data};
 use super::visibility::{SetKind, VisibilityData};
 use crate::error::{Error, Result};
-use crate::math::azimuth;
 use crate::math::triple;
+use crate::rules::lighting::light_sets_with;
 use crate::scene::model::{Albedo, Camera, Environment, KeyLight, Material, Scene};
 use crate::vk::{barrier, Recorder};
 
@@ -187,7 +187,8 @@ impl Renderer {
             .any(|(a, b)| a.direction != b.direction || a.angular_radius != b.angular_radius);
         self.live.scene.key_lights = next;
         if moved {
-            let data = VisibilityData::for_sets(&self.live.scene, &self.key_sets());
+            let keys: Vec<_> = self.live_sets().into_iter().filter(|(k, _)| *k != SetKind::Environment).collect();
+            let data = VisibilityData::for_sets(&self.live.scene, &keys);
             for (dst, offset, bytes) in self.visibility.key_light_updates(&data) {
                 self.live.update(dst, offset, bytes);
             }
@@ -270,30 +271,15 @@ impl Renderer {
         &self.live.scene
     }
 
-    /// The key lights' sets of the live scene, one per slot.
-    fn key_sets(&self) -> Vec<(SetKind, crate::math::azimuth::AzimuthSet)> {
-        let gi = &self.live.scene.gi;
-        let keys = self.live.scene.key_lights.iter().enumerate();
-        keys.map(|(i, l)| {
-            (SetKind::KeyLight(i), azimuth::key_light_set(l, gi.key_light_azimuths as usize, gi.interpolation))
-        })
-        .collect()
+    /// The live scene's light sets in the renderer's order (the sets fixed at creation).
+    fn live_sets(&self) -> Vec<(SetKind, crate::math::azimuth::AzimuthSet)> {
+        light_sets_with(&self.live.scene, self.visibility.set_kinds().contains(&SetKind::Environment))
     }
 
     /// Queues `hfgi.shade.light` from the live lights, in the renderer's set order.
     fn queue_lighting(&mut self) {
-        let s = &self.live.scene;
-        let mut sets = Vec::new();
-        if has_environment_set(&self.visibility.set_kinds()) {
-            sets.push((SetKind::Environment, azimuth::environment_set(s.gi.azimuths as usize, s.gi.interpolation)));
-        }
-        sets.extend(self.key_sets());
-        let data = light_data(s, &sets);
+        let data = light_data(&self.live.scene, &self.live_sets());
         let dst = self.shade.bindings()[0].raw;
         self.live.update(dst, 0, bytemuck::cast_slice(&data).to_vec());
     }
-}
-
-fn has_environment_set(kinds: &[SetKind]) -> bool {
-    kinds.contains(&SetKind::Environment)
 }

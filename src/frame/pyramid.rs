@@ -296,25 +296,26 @@ impl HeightPyramid {
     /// effect at the next [`HeightPyramid::record`]. A renderer sets the midrange of its heights
     /// ([`crate::frame::renderer::height_origin`]); the default is 0.
     pub fn set_origin(&mut self, ctx: &Context, origin: f32) -> Result<()> {
+        memory::upload(ctx, &self.table, 0, &self.table_for(origin)?)?;
+        self.origin = origin;
+        Ok(())
+    }
+
+    /// The level table's bytes with origin `origin` (finite).
+    fn table_for(&self, origin: f32) -> Result<Vec<u8>> {
         if !origin.is_finite() {
             return Err(Error::param("pyramid origin", origin, "a finite height"));
         }
-        let entries = table_entries(&self.layout, self.kind, origin);
-        memory::upload(ctx, &self.table, 0, bytemuck::cast_slice(&entries))?;
-        self.origin = origin;
-        Ok(())
+        Ok(bytemuck::cast_slice(&table_entries(&self.layout, self.kind, origin)).to_vec())
     }
 
     /// [`HeightPyramid::set_origin`] without the upload: sets the origin and returns the level
     /// table's new bytes for the caller to record (`vkCmdUpdateBuffer` into
     /// [`HeightPyramid::table_buffer`] at offset 0).
     pub(crate) fn origin_table(&mut self, origin: f32) -> Result<Vec<u8>> {
-        if !origin.is_finite() {
-            return Err(Error::param("pyramid origin", origin, "a finite height"));
-        }
-        let entries = table_entries(&self.layout, self.kind, origin);
+        let bytes = self.table_for(origin)?;
         self.origin = origin;
-        Ok(bytemuck::cast_slice(&entries).to_vec())
+        Ok(bytes)
     }
 
     /// The origin `z0` subtracted from level 0 on every read ([`HeightPyramid::set_origin`]).

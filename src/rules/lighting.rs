@@ -21,9 +21,15 @@ pub fn has_environment(scene: &Scene) -> bool {
 
 /// The light sets of a scene with their azimuth samples (docs/direct.md §4).
 pub fn light_sets(scene: &Scene) -> Vec<(SetKind, AzimuthSet)> {
+    light_sets_with(scene, has_environment(scene))
+}
+
+/// [`light_sets`] with the environment set present or not as `environment` says (a renderer
+/// keeps the sets it was created with while its lights change: `Renderer::set_environment`).
+pub fn light_sets_with(scene: &Scene, environment: bool) -> Vec<(SetKind, AzimuthSet)> {
     let gi = &scene.gi;
     let mut sets = Vec::new();
-    if has_environment(scene) {
+    if environment {
         sets.push((SetKind::Environment, azimuth::environment_set(gi.azimuths as usize, gi.interpolation)));
     }
     for (i, l) in scene.key_lights.iter().enumerate() {
