@@ -78,7 +78,7 @@ type Change = (&'static str, fn(&mut Scene), &'static [&'static str]);
 fn each_live_change_equals_a_fresh_renderer_and_records_its_stages() {
     let ctx = gpu();
     let mut want = base();
-    let opts = RendererOptions { key_lights: Some(2) };
+    let opts = RendererOptions { key_lights: Some(2), ..Default::default() };
     let mut live = Renderer::with_options(&ctx, &want, &opts).unwrap();
     record_frame(&ctx, &mut live);
     let changes: [Change; 10] = [

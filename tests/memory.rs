@@ -57,6 +57,11 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
         ("sweep, 1 bounce", "", with(&["gi.visibility=\"sweep\"", "gi.bounces=1"])),
         ("sweep, subsample 4", "", with(&["gi.visibility=\"sweep\"", "gi.subsample=4"])),
         ("sweep, no environment", "[[key_light]]\n", with(&["gi.visibility=\"sweep\""])),
+        (
+            "local lights only, 1 bounce",
+            "[[local_light]]\nposition = [10.0, 12.0, 5.0]\n[[local_light]]\nposition = [30.0, 20.0, 8.0]\n",
+            with(&["gi.bounces=1", "gi.local_light_azimuths=5"]),
+        ),
     ]
 }
 

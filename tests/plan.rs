@@ -287,9 +287,18 @@ fn plan_is_pure_and_lists_every_pass() {
     assert_eq!(p.names(), frame_stages(&[PD, PS, PM, VE, VK], true, 3, true));
     assert_eq!(p, plan(&s, &FrameState::static_scene(0)));
     let names: Vec<&str> = p.passes().iter().map(|x| x.name).collect();
-    let all = ["HeightPyramid", "VisibilityPass", "ShadePass", "IndirectPass", "MaxPyramid", "RadiancePyramid"];
+    let all = [
+        "HeightPyramid",
+        "VisibilityPass",
+        "ShadePass",
+        "LocalLightPass",
+        "IndirectPass",
+        "MaxPyramid",
+        "RadiancePyramid",
+    ];
     assert_eq!(names, all);
-    assert!(p.passes().iter().all(|x| x.created && !x.reason.is_empty()));
+    // Every pass but the local lights' (the scene has none) is created, each with its reason.
+    assert!(p.passes().iter().all(|x| x.created == (x.name != "LocalLightPass") && !x.reason.is_empty()));
     let text = format!("{}{p}", p.passes_text());
     for line in ["pyramid.decimate", "gi.bounces = 3, bounce 3 of 3", "IndirectPass", "created"] {
         assert!(text.contains(line), "{line} missing from\n{text}");

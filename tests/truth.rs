@@ -258,3 +258,113 @@ fn convergence_steep_dem() {
     let f = field("steep", 40, 28, |i, j| 8.0 * base.data()[j * 40 + i] - 150.0);
     step_halving("steep DEM", &sharp(f, 4.0));
 }
+
+// ---- Local lights (spheres; src/reference/local_truth.rs, docs/accuracy.md §1) ----
+
+fn local(x: f64, y: f64, z: f64, radius: f64, radiance: [f64; 3]) -> hfgi::scene::model::LocalLight {
+    hfgi::scene::model::LocalLight { position: glam::DVec3::new(x, y, z), radius, radiance }
+}
+
+/// A scene lit by `lights` alone (no environment, no key light).
+fn lit_by_locals(field: HeightField, lights: Vec<hfgi::scene::model::LocalLight>) -> Scene {
+    let mut s = scene(field);
+    s.environment = hfgi::scene::model::Environment::default();
+    s.key_lights.clear();
+    s.local_lights = lights;
+    s
+}
+
+/// `ρ/π · π L sin²Θ cos θ_c` at world point `p` with normal +z: a sphere fully above the
+/// horizon (`θ_c + Θ ≤ π/2`) and unblocked.
+fn flat_local(l: &hfgi::scene::model::LocalLight, p: glam::DVec3) -> [f64; 3] {
+    let c = l.position - p;
+    let d = c.length();
+    assert!((c.z / d).acos() + (l.radius / d).asin() <= std::f64::consts::FRAC_PI_2, "cap not above the horizon");
+    let g = PI * (l.radius / d).powi(2) * (c.z / d);
+    [0, 1, 2].map(|k| RHO[k] / PI * l.radiance[k] * g)
+}
+
+fn rel3(got: [f64; 3], want: [f64; 3]) -> f64 {
+    (0..3).map(|k| (got[k] - want[k]).abs() / want[k]).fold(0.0, f64::max)
+}
+
+#[test]
+fn local_light_on_a_flat_field_equals_the_closed_form() {
+    let light = local(16.0, 16.0, 6.0, 1.5, [1.0, 2.0, 3.0]);
+    let mut s = lit_by_locals(flat(33, 33, 0.0), vec![light.clone()]);
+    s.gi.bounces = 1;
+    for sh_visibility in [false, true] {
+        let t = render_truth(&s, &TruthSettings { sh_visibility, ..Default::default() }, &mut |_, _| {}).unwrap();
+        // Directly below (a cap over the pole: the uniform azimuths), one texel off (still
+        // over the pole), and off to the side (the Gauss–Legendre azimuths).
+        let mut worst = 0.0f64;
+        for (i, j) in [(16, 16), (17, 16), (12, 16), (20, 19), (8, 16), (16, 27), (3, 5)] {
+            let p = glam::DVec3::new(i as f64, j as f64, 0.0);
+            let err = rel3(t.direct[j * 33 + i], flat_local(&light, p));
+            worst = worst.max(err);
+            assert!(err <= 1e-6, "texel ({i}, {j}), sh_visibility={sh_visibility}: relative error {err:e}");
+        }
+        let ind = t.indirect.iter().flat_map(|p| p.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+        eprintln!("local light, flat field, sh_visibility={sh_visibility}: max relative error {worst:.2e}");
+        assert_eq!(ind, 0.0, "a flat field has no indirect light");
+    }
+}
+
+#[test]
+fn local_light_below_a_ridge_is_shadowed_above_it_not() {
+    // A one-texel wall of height 10 at x = 20 on a 48×24 flat field.
+    let wall = field("wall", 48, 24, |i, _| if i == 20 { 10.0 } else { 0.0 });
+    let (low, high) = (local(30.0, 12.0, 3.0, 1.5, [1.0, 2.0, 3.0]), local(30.0, 12.0, 40.0, 1.5, [1.0, 2.0, 3.0]));
+    let at = |light: &hfgi::scene::model::LocalLight, i: usize| {
+        let s = lit_by_locals(wall.clone(), vec![light.clone()]);
+        render_truth(&s, &TruthSettings::default(), &mut |_, _| {}).unwrap().direct[12 * 48 + i]
+    };
+    let behind = at(&low, 10);
+    eprintln!("local light below the ridge, receiver behind it: direct {behind:?}");
+    assert_eq!(behind, [0.0; 3], "the wall shadows the low light");
+    let over = at(&high, 10);
+    let err = rel3(over, flat_local(&high, glam::DVec3::new(10.0, 12.0, 0.0)));
+    eprintln!("local light above the ridge: relative error against the flat closed form {err:.2e}");
+    assert!(err <= 1e-6, "the high light is not shadowed: {err:e}");
+    // In front of the wall (which lies behind the light, partly above the window's lower
+    // part): nothing blocks it.
+    let front = at(&low, 36);
+    let err = rel3(front, flat_local(&low, glam::DVec3::new(36.0, 12.0, 0.0)));
+    eprintln!("local light in front of the wall: relative error against the flat closed form {err:.2e}");
+    assert!(err <= 1e-6, "a wall behind the light shadows it: {err:e}");
+}
+
+#[test]
+fn gpu_reference_with_local_lights_matches_the_cpu_reference() {
+    let ctx = common::gpu();
+    let rough = rough_field(20, 16, 8);
+    let h = |i: usize, j: usize| rough.data()[j * 20 + i] as f64;
+    let lights = vec![
+        // Close above the surface: partly hidden by the nearby slopes.
+        local(6.0, 5.0, h(6, 5) + 2.0, 1.0, [3.0, 2.5, 2.0]),
+        // Texel (14, 10) inside its sphere, its neighbours very close to it.
+        local(14.0, 10.2, h(14, 10) + 0.6, 1.5, [1.0, 2.0, 4.0]),
+    ];
+    let mut s = lit_by_locals(rough.clone(), lights.clone());
+    s.gi.bounces = 1;
+    let fast = TruthSettings { azimuths: 64, ..Default::default() };
+    // The same, 10⁶ world units higher: the centre's high/low f32 split.
+    let mut high = s.clone();
+    high.field = HeightField::new("high", 20, 16, rough.data().iter().map(|v| v + 1e6).collect(), 16384).unwrap();
+    high.local_lights =
+        lights.iter().map(|l| local(l.position.x, l.position.y, l.position.z + 1e6, l.radius, l.radiance)).collect();
+    let cases = [
+        ("exact", &s, fast),
+        ("SH-visibility", &s, TruthSettings { sh_visibility: true, ..fast }),
+        ("exact, march 1/8", &s, TruthSettings { march: true, ..fast }),
+        ("exact, heights + 1e6", &high, fast),
+    ];
+    for (what, sc, settings) in cases {
+        let cpu = render_truth(sc, &settings, &mut |_, _| {}).unwrap();
+        let gpu = hfgi::frame::truth::render_truth_gpu(&ctx, sc, &settings, &mut |_, _| {}).unwrap();
+        let (d, i) = (rel_l2(&as32(&gpu.direct), &cpu.direct), rel_l2(&as32(&gpu.indirect), &cpu.indirect));
+        eprintln!("local lights, {what}: GPU vs CPU reference: direct {d:.2e}, indirect {i:.2e}");
+        assert!(cpu.indirect.iter().any(|p| p[0] > 0.0), "the local lights feed the bounce");
+        assert!(d.max(i) <= 1e-4, "GPU and CPU references differ ({what}): {d:e} {i:e}");
+    }
+}

@@ -112,8 +112,9 @@ struct Row {
 }
 
 /// The configurations: the baseline, then one knob at a time, the four presets, then (full
-/// sweep) the m × k grid; swept horizons (`gi.visibility = "sweep"`) unless the field wraps.
-fn configs(base: &GiSettings, quick: bool, base_wraps: bool) -> Vec<(String, GiSettings)> {
+/// sweep) the m × k grid; swept horizons (`gi.visibility = "sweep"`) unless the field wraps;
+/// the local lights' azimuths when the scene has local lights.
+fn configs(base: &GiSettings, quick: bool, base_wraps: bool, local_lights: bool) -> Vec<(String, GiSettings)> {
     let mut out = vec![("baseline".to_string(), base.clone())];
     let mut push = |knob: &str, f: &dyn Fn(&mut GiSettings)| {
         let mut g = base.clone();
@@ -164,6 +165,12 @@ fn configs(base: &GiSettings, quick: bool, base_wraps: bool) -> Vec<(String, GiS
                 g.visibility = VisibilityMethod::Sweep;
                 g.sweep_near = r;
             });
+        }
+    }
+    if local_lights {
+        let ks: &[u32] = if quick { &[4] } else { &[2, 4, 8, 16, 32] };
+        for &k in ks {
+            push("local_light_azimuths", &|g| g.local_light_azimuths = k);
         }
     }
     // The presets, marked on the Pareto plot (one group each).
@@ -395,8 +402,14 @@ fn settings_label(g: &GiSettings) -> String {
         VisibilityMethod::Sweep => format!(" sweep near={}", g.sweep_near),
         VisibilityMethod::Ladder => String::new(),
     };
+    let default_local = GiSettings::default().local_light_azimuths;
+    let local = if g.local_light_azimuths != default_local {
+        format!(" local_az={}", g.local_light_azimuths)
+    } else {
+        String::new()
+    };
     format!(
-        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}",
+        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}",
         g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
 }
@@ -457,7 +470,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
         let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         let cfgs = match a.sweep {
-            Sweep::Knobs => configs(&scene.gi, a.quick, scene.wrap),
+            Sweep::Knobs => configs(&scene.gi, a.quick, scene.wrap, !scene.local_lights.is_empty()),
             Sweep::Ablation => ablation(&scene.gi, false),
             Sweep::Presets => ablation(&scene.gi, true),
         };

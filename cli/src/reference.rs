@@ -39,7 +39,8 @@ pub struct ReferenceArgs {
     /// Gauss–Legendre nodes per elevation interval (CONVENTIONS.md: at least 16).
     #[arg(long, default_value_t = 16)]
     nodes: u32,
-    /// Gauss–Legendre nodes over a key light's azimuth range (exact reference).
+    /// Gauss–Legendre nodes over a key light's azimuth range (exact reference) and over a
+    /// local light's, per receiver (both references).
     #[arg(long, default_value_t = 64)]
     cap_nodes: u32,
     /// Run the f64 CPU version instead of the GPU one (fields up to 64²; for checking).

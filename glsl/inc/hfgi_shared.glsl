@@ -84,6 +84,20 @@ struct hfgi_ShadePush {
     vec4 camera_lo;     // low part: position = camera + camera_lo (f64 split in two f32)
 };
 
+// Push constants of the local lights' shading (glsl/shade/local.comp.glsl,
+// docs/local-lights.md). 48 bytes.
+struct hfgi_LocalPush {
+    uint width;         // full resolution
+    uint height;
+    uint light_count;   // local-light slots (hfgi.local.lights holds 3 vec4 per slot)
+    uint azimuths;      // gi.local_light_azimuths: azimuth samples per light and receiver
+    float texel_size;
+    uint albedo_map;    // 1: per-texel albedo buffer
+    uint pad0;
+    uint pad1;
+    vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
+};
+
 // Push constants of the indirect scan (indirect.scan). 80 bytes.
 struct hfgi_IndirectPush {
     uint work_width;      // receiver grid
@@ -141,7 +155,7 @@ struct hfgi_WaterPush {
     vec4 drops[4];      // (x, y, amplitude, radius), texels
 };
 
-// Push constants of the ground-truth reference (glsl/reference/truth.comp.glsl). 96 bytes.
+// Push constants of the ground-truth reference (glsl/reference/truth.comp.glsl). 128 bytes.
 struct hfgi_TruthPush {
     uint width;
     uint height;
@@ -156,11 +170,14 @@ struct hfgi_TruthPush {
     uint azimuth_first; // azimuths [first, first + count) of `azimuths` (cap = 0) or samples
     uint azimuth_count; //   [first, first + count) of the cap buffer (cap = 1) in this dispatch
     uint march;         // 1: march at `step`, 0: exact intersection with the bilinear patches
-    uint cap;           // 1: this dispatch integrates the key light cap_* (exact, direct)
+    uint cap;           // 1: this dispatch integrates the key light cap_* (exact, direct);
+                        // 2: the local light local_* (both variants, direct)
     uint accumulate;    // 1: add to the output, 0: overwrite it (a pass's first dispatch)
-    uint pad0;
+    uint local_nodes;   // local light: azimuth samples of a cap holding no pole (cap buffer [0, local_nodes))
     vec4 cap_dir;       // key light: unit direction (xyz), cos α (w)
-    vec4 cap_radiance;  // key light: rgb radiance, sin α (w)
+    vec4 cap_radiance;  // key light: rgb radiance, sin α (w); local light: rgb radiance
+    vec4 local_centre;  // local light: centre, high f32 part (xyz); radius (w)
+    vec4 local_lo;      // local light: centre − high part (xyz), f64 split in two f32
 };
 
 #endif

@@ -12,7 +12,12 @@
 // interval). Outputs per texel:
 //   exact mode:  E = ∫ L_in max(N·ω, 0) dω (rgb) in element 0;
 //   SH mode:     V_k = ∫_open y_k dω (direct, .x) or U_k = ∫_blocked L_hit y_k dω (indirect, rgb).
-// The host finishes the shading in f64 (ρ/π, L ⊛ V, clamped-cosine ZH).
+// Local lights (cap = 2, both modes, direct light; src/reference/local_truth.rs is the f64
+// twin): one light per dispatch, its cap formed per texel, E = L ∫ max(N·ω, 0) dω over the
+// directions whose ray reaches the sphere before the height field, accumulated (rgb) in a
+// region after the W·H·n² texels' (element W·H·n² + texel).
+// The host finishes the shading in f64 (ρ/π, L ⊛ V, clamped-cosine ZH; ρ/π · E of the local
+// lights added to the direct exit radiance).
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;
@@ -30,8 +35,8 @@ layout(std430, binding = 1) readonly buffer Light { vec4 hfgi_light[]; };      /
 layout(std430, binding = 2) readonly buffer Source { vec4 hfgi_source[]; };    // W×H rgb: L_{b-1}
 layout(std430, binding = 3) readonly buffer Gauss { vec2 hfgi_gauss[]; };      // nodes, weights on [-1, 1]
 layout(std430, binding = 4) readonly buffer Consts { float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER]; };
-layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   // texel × n² (accumulated over azimuth chunks)
-layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // key-light azimuth samples (φ, weight)
+layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   // texel × n² (accumulated over azimuth chunks), then texel: local lights' E
+layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // local lights' (sin u, π/2·w·cos u) [0, local_nodes), then key-light samples (φ, weight)
 layout(push_constant) uniform Push { hfgi_TruthPush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
@@ -317,11 +322,142 @@ void cap_azimuth(vec2 d, vec3 N, float wphi, float hor, float tangent) {
     }
 }
 
+// ---- Local lights (cap = 2; src/reference/local_truth.rs) ----
+
+// ∫_a^b (N·ω) cos ω dω on the half-plane of azimuth d, Gauss–Legendre, every node visible.
+float local_open(vec2 d, vec3 N, float a, float b) {
+    float half_w = 0.5 * (b - a), mid = 0.5 * (b + a), sum = 0.0;
+    for (int e = 0; e < HFGI_NODES; ++e) {
+        float om = mid + half_w * hfgi_gauss[e].x;
+        vec3 dir = vec3(cos(om) * d, sin(om));
+        sum += half_w * hfgi_gauss[e].y * cos(om) * max(dot(N, dir), 0.0);
+    }
+    return sum;
+}
+
+// Node e of the interval (mid ± half_w) below the horizon, first hit at planar distance t_hit
+// texels (< 0: it escapes): its (N·ω) cos ω·weight if it reaches the sphere first. Sphere
+// entry: τ = q/(u·C + √((u·C)² − q)), q = d² − r², planar τ·cos ω / s.
+float local_node(int e, float mid, float half_w, vec2 d, vec3 N, vec3 C, float q, float t_hit) {
+    float om = mid + half_w * hfgi_gauss[e].x;
+    float co = cos(om);
+    vec3 u = vec3(co * d, sin(om));
+    if (t_hit >= 0.0) {
+        float b = dot(u, C);
+        float t_s = q / (b + sqrt(max(b * b - q, 0.0))) * co / pc.texel_size;
+        if (t_hit <= t_s) return 0.0;
+    }
+    return half_w * hfgi_gauss[e].y * co * max(dot(N, u), 0.0);
+}
+
+// ∫_a^b (N·ω) cos ω dω below the horizon, node by node: the first hits of the ascending nodes
+// in one sweep along the ray (as bounce_azimuth), a node counting iff it escapes or its first
+// hit lies beyond the sphere entry.
+float local_below(ivec2 p, vec2 d, float h0, vec3 N, float a, float b, vec3 C, float q) {
+    float half_w = 0.5 * (b - a), mid = 0.5 * (b + a), sum = 0.0;
+    int e = 0;
+    if (HFGI_MARCH != 0u) {
+        float running = -1.5707963267948966;
+        uint bound = march_bound(vec2(p), d);
+        float hit_t = 0.0;
+        uint k = 1u;
+        for (; e < HFGI_NODES; ++e) {
+            float om = mid + half_w * hfgi_gauss[e].x;
+            while (running < om && k <= bound) {
+                float t = float(k) * pc.step;
+                vec2 s = vec2(p) + t * d;
+                if (!inside(s, t)) break;
+                k += 1u;
+                float w_k = atan((bilinear_h(s) - h0) / (t * pc.texel_size));
+                if (w_k > running) { running = w_k; hit_t = t; }
+            }
+            if (running < om) break;
+            sum += local_node(e, mid, half_w, d, N, C, q, hit_t);
+        }
+    } else {
+        Ray r = ray_start(p, d, h0);
+        uint bound = piece_bound(r);
+        float running = -1e30;
+        Piece pq;
+        for (uint it = 0u; it < bound && e < HFGI_NODES; ++it) {
+            if (!ray_next(r, pq)) break;
+            vec2 m = piece_max(pq);
+            float top = max(running, m.x);
+            for (; e < HFGI_NODES; ++e) {
+                float k = tan(mid + half_w * hfgi_gauss[e].x) * pc.texel_size;
+                if (k > top) break;
+                sum += local_node(e, mid, half_w, d, N, C, q, pq.t0 + first_reach(pq, k, m.y));
+            }
+            running = top;
+        }
+    }
+    for (; e < HFGI_NODES; ++e) sum += local_node(e, mid, half_w, d, N, C, q, -1.0);
+    return sum;
+}
+
+// ∫ max(N·ω, 0) dω over the directions of the local light's cap that reach the sphere before
+// the height field, for this dispatch's samples [azimuth_first, azimuth_first + azimuth_count)
+// of the texel's own count (local_nodes, or the A uniform azimuths for a cap holding a pole).
+// Inside the sphere (d ≤ r): the hemisphere toward the centre (+z at d = 0), unblocked.
+float local_light(ivec2 p, float h0, vec3 N) {
+    // (c_hi − P) + c_lo: the f64 centre relative to the receiver, exact near the surface.
+    precise vec3 C = (pc.local_centre.xyz - vec3(vec2(p) * pc.texel_size, h0)) + pc.local_lo.xyz;
+    float r = pc.local_centre.w;
+    float dist = length(C);
+    bool in_sphere = dist <= r;
+    vec3 l = dist > 0.0 ? C / dist : vec3(0.0, 0.0, 1.0);
+    float q = (dist - r) * (dist + r);
+    float sin_a = in_sphere ? 1.0 : r / dist;
+    float cos_a = in_sphere ? 0.0 : sqrt(q) / dist;
+    float cos_e = length(l.xy);
+    bool pole = cos_e <= sin_a;
+    uint count = pole ? pc.azimuths : pc.local_nodes;
+    float phi_c = atan(l.y, l.x);
+    float beta = pole ? 0.0 : asin(min(sin_a / cos_e, 1.0));
+    float dphi = 6.283185307179586 / float(pc.azimuths);
+    float sum = 0.0;
+    uint end = min(pc.azimuth_first + pc.azimuth_count, count);
+    for (uint a = pc.azimuth_first; a < end; ++a) {
+        vec2 g = hfgi_caps[min(a, pc.local_nodes - 1u)];
+        float phi = pole ? (float(a) + 0.5) * dphi : phi_c + beta * g.x;
+        float wphi = pole ? dphi : beta * g.y;
+        vec2 d = vec2(cos(phi), sin(phi));
+        // The cap's elevation window (src/reference/cap.rs cap_window).
+        float dl = dot(d, l.xy), cr = d.x * l.y - d.y * l.x;
+        float x = sin_a * sin_a - cr * cr;
+        if (x < 0.0) continue;
+        float R = length(vec2(dl, l.z));
+        // Inside: δ = π/2 exactly (the formula's 0/0 where R → 0 loses it in f32).
+        float delta = in_sphere ? 1.5707963267948966 : 2.0 * asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
+        float wc = atan(l.z, dl);
+        float tangent = atan(-(N.x * d.x + N.y * d.y), N.z);
+        float lo = max(wc - delta, tangent), hi = min(wc + delta, 1.5707963267948966);
+        if (hi <= lo) continue;
+        if (in_sphere) {
+            sum += wphi * local_open(d, N, lo, hi);
+            continue;
+        }
+        // Above the horizon every direction escapes; below it, node by node.
+        float hor = horizon(p, d, h0);
+        float lo_open = max(lo, hor);
+        if (hi > lo_open) sum += wphi * local_open(d, N, lo_open, hi);
+        float hi_below = min(hi, hor);
+        if (hi_below > lo) sum += wphi * local_below(p, d, h0, N, lo, hi_below, C, q);
+    }
+    return sum;
+}
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.x, gl_GlobalInvocationID.y + pc.row_offset);
     if (p.x >= int(pc.width) || p.y >= int(pc.height) || gl_GlobalInvocationID.y >= pc.rows) return;
     float h0 = height_at(p);
     vec3 N = normal_at(p);
+    if (pc.cap == 2u) {
+        uint o = pc.width * pc.height * uint(HFGI_N2) + uint(p.y) * pc.width + uint(p.x);
+        vec3 prev = pc.accumulate != 0u ? hfgi_out[o].rgb : vec3(0.0);
+        hfgi_out[o] = vec4(prev + local_light(p, h0, N) * pc.cap_radiance.rgb, 0.0);
+        return;
+    }
     bool sh_mode = HFGI_SHVIS != 0u;
     bool indirect = pc.indirect != 0u;
     for (int k = 0; k < HFGI_N2; ++k) hfgi_acc[k] = vec3(0.0);

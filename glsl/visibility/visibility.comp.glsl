@@ -29,6 +29,7 @@ layout(std430, binding = 6) readonly buffer Horizons { float hfgi_horizons[]; };
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
+#include "hfgi_near.glsl"
 
 float hfgi_omega[HFGI_NV];
 float hfgi_base[HFGI_NV];
@@ -68,22 +69,6 @@ float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
         }
     }
     return wmax;
-}
-
-// Largest F(t)/t of the piece F(t0 + τ) = aτ² + bτ + c, τ ∈ [0, t1 − t0] (at t0 = 0, c = 0 and
-// the limit is b). Twin: reference::sweep::piece_max.
-float hfgi_piece_max(float t0, float t1, float a, float b, float c) {
-    float len = t1 - t0;
-    float best = max(t0 > 0.0 ? c / t0 : b, ((a * len + b) * len + c) / t1);
-    float cp = (a * t0 - b) * t0 + c; // F/t = a·t + b' + c'/t: a maximum at √(c'/a) when a, c' < 0
-    if (a < 0.0 && cp < 0.0) {
-        float ts = sqrt(cp / a);
-        if (ts > t0 && ts < t1) {
-            float tau = ts - t0;
-            best = max(best, ((a * tau + b) * tau + c) / ts);
-        }
-    }
-    return best;
 }
 
 // The sweep's near field (docs/direct.md §7): sup F(t)/t for t ∈ (0, reach] along the receiver's

@@ -25,7 +25,7 @@ use super::visibility::{SetKind, VisibilityData};
 use crate::error::{Error, Result};
 use crate::math::triple;
 use crate::rules::lighting::light_sets_with;
-use crate::scene::model::{Albedo, Camera, Environment, KeyLight, Material, Scene};
+use crate::scene::model::{Albedo, Camera, Environment, KeyLight, LocalLight, Material, Scene};
 use crate::vk::{barrier, Recorder};
 
 /// Largest data one `vkCmdUpdateBuffer` may write (Vulkan: 65536 bytes).
@@ -37,6 +37,14 @@ pub struct RendererOptions {
     /// Key-light slots: the most key lights [`Renderer::set_key_lights`] accepts (default and
     /// minimum: the scene's count). Each slot is a light set (visibility `m_k` azimuths).
     pub key_lights: Option<usize>,
+    /// Local-light slots: the most local lights [`Renderer::set_local_lights`] accepts
+    /// (default and minimum: the scene's count; 0 creates no local-light pass).
+    pub local_lights: Option<usize>,
+}
+
+/// A local-light slot without a light: no radiance (the shader skips it).
+pub fn dark_local_light(texel_size: f64) -> LocalLight {
+    LocalLight { position: DVec3::ZERO, radius: texel_size, radiance: [0.0; 3] }
 }
 
 /// A slot without a light: no radiance, pointing up (its visibility is computed and multiplied
@@ -60,8 +68,20 @@ pub fn with_slots(scene: &Scene, opts: &RendererOptions) -> Result<Scene> {
     }
     let mut s = scene.clone();
     s.key_lights.resize(slots, dark_key_light());
+    let local = opts.local_lights.unwrap_or(scene.local_lights.len());
+    if local < scene.local_lights.len() || local > MAX_LOCAL_LIGHTS {
+        return Err(Error::param(
+            "RendererOptions::local_lights",
+            local,
+            format!("at least the scene's {} local lights and at most {MAX_LOCAL_LIGHTS}", scene.local_lights.len()),
+        ));
+    }
+    s.local_lights.resize(local, dark_local_light(scene.texel_size));
     Ok(s)
 }
+
+/// Most local-light slots (each costs its horizon marches at every texel).
+pub const MAX_LOCAL_LIGHTS: usize = 256;
 
 /// Most key-light slots (each is a visibility set of the shading's loop).
 pub const MAX_KEY_LIGHTS: usize = 64;
@@ -199,6 +219,32 @@ impl Renderer {
         Ok(())
     }
 
+    /// Sets the local lights: at most the renderer's slots ([`RendererOptions::local_lights`]);
+    /// the slots left over hold no light. Any change re-runs `shade.direct` and
+    /// `shade.local_lights` (and the bounces) at the next [`Renderer::record`]; no visibility
+    /// set is recomputed (the local lights' horizons are marched inside their stage).
+    pub fn set_local_lights(&mut self, lights: &[LocalLight]) -> Result<()> {
+        let slots = self.live.scene.local_lights.len();
+        let Some(pass) = self.local.as_ref().filter(|_| lights.len() <= slots) else {
+            return Err(Error::param(
+                "local lights",
+                lights.len(),
+                format!("at most {slots} (the local-light slots fixed at creation: RendererOptions::local_lights)"),
+            ));
+        };
+        let s = self.live.scene.texel_size;
+        for (k, l) in lights.iter().enumerate() {
+            l.check(k, s)?;
+        }
+        let mut next: Vec<LocalLight> = lights.to_vec();
+        next.resize(slots, dark_local_light(s));
+        let (dst, offset, bytes) = pass.light_update(&next);
+        self.live.update(dst, offset, bytes);
+        self.live.scene.local_lights = next;
+        self.live.changed(Changes::LOCAL_LIGHTS);
+        Ok(())
+    }
+
     /// Sets the material: a constant albedo, the Phong specular colour and exponent. Fixed at
     /// creation: an albedo map (pass it unchanged), and whether the surface reflects light and
     /// uses the glossy vector pyramid (the passes created for it).
@@ -240,6 +286,9 @@ impl Renderer {
         }
         self.live.scene.material = material.clone();
         self.shade.push_mut().set_material(material);
+        if let Some(l) = self.local.as_mut() {
+            l.push_mut().set_material(material);
+        }
         let spec = material.specular.unwrap_or([0.0; 3]);
         if let Some(i) = self.indirect.as_mut() {
             i.update_pushes(|p| p.set_material(material), spec);

@@ -4,6 +4,7 @@
 
 pub mod indirect;
 pub mod live;
+pub mod local;
 pub mod memory;
 pub mod plan;
 pub mod pyramid;

@@ -74,7 +74,9 @@ impl Changes {
     pub const CAMERA: Changes = Changes(8);
     /// The direct light that the indirect bounces read was re-shaded after them (amortisation).
     pub const DIRECT_LIGHT: Changes = Changes(16);
-    const NAMES: [&'static str; 5] = ["environment", "key lights", "material", "camera", "the direct light it reads"];
+    pub const LOCAL_LIGHTS: Changes = Changes(32);
+    const NAMES: [&'static str; 6] =
+        ["environment", "key lights", "material", "camera", "the direct light it reads", "local lights"];
 
     pub fn is_empty(self) -> bool {
         self.0 == 0
@@ -202,6 +204,8 @@ pub struct Planner {
     azimuths: u32,
     key_lights: usize,
     key_light_azimuths: u32,
+    local_lights: usize,
+    local_light_azimuths: u32,
     bounces: u32,
     albedo: bool,
     specular: bool,
@@ -244,6 +248,8 @@ impl Planner {
             azimuths: gi.azimuths,
             key_lights: scene.key_lights.len(),
             key_light_azimuths: gi.key_light_azimuths,
+            local_lights: scene.local_lights.len(),
+            local_light_azimuths: gi.local_light_azimuths,
             bounces: gi.bounces,
             albedo,
             specular: m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0)),
@@ -372,6 +378,17 @@ impl Planner {
             add(&mut stages, Stage::ShadeDirect, when.clone());
         } else {
             add(&mut omitted, Stage::ShadeDirect, when.clone());
+        }
+        if self.local_lights == 0 {
+            add(&mut omitted, Stage::ShadeLocalLights, "no local lights".into());
+        } else {
+            let (k, a) = (self.local_lights, self.local_light_azimuths);
+            let what = format!("{k} local light{} ({a} azimuths each, horizons up to each light)", plural(k));
+            if direct {
+                add(&mut stages, Stage::ShadeLocalLights, format!("{what}: added to the direct light just shaded"));
+            } else {
+                add(&mut omitted, Stage::ShadeLocalLights, format!("{what}: the direct light is kept"));
+            }
         }
         let synthesize = !self.vector && self.mode == PyramidMode::Stack;
         let indirect_stages = [

@@ -1,5 +1,5 @@
 //! The GI effect assembled from its passes, in the order of NS09 figure 6:
-//! heights → pyramid → visibility (environment, key lights) → direct shade → per bounce:
+//! heights → pyramid → visibility (environment, key lights) → direct shade (+ local lights) → per bounce:
 //! radiance pyramid → indirect scan → indirect shade.
 //!
 //! The host owns the command buffer; [`Renderer::record`] records every stage into it.
@@ -8,6 +8,7 @@
 
 use super::indirect::IndirectPass;
 use super::live::{self, Live, RendererOptions};
+use super::local::LocalLightPass;
 use super::plan::{FrameState, Plan, Planner, Stage};
 use super::pyramid::HeightPyramid;
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
@@ -47,6 +48,8 @@ pub struct Renderer {
     pub pyramid: HeightPyramid,
     pub visibility: VisibilityPass,
     pub shade: ShadePass,
+    /// Present when the scene has local lights (docs/local-lights.md).
+    pub local: Option<LocalLightPass>,
     /// Present when the scene needs indirect light (bounces > 0 and some exit radiance).
     pub indirect: Option<IndirectPass>,
     planner: Planner,
@@ -96,10 +99,25 @@ impl Renderer {
             }
         };
         let planner = Planner::new(scene);
+        let local = match (!scene.local_lights.is_empty())
+            .then(|| LocalLightPass::new(ctx, &pyramid, &shade, scene))
+            .transpose()
+        {
+            Ok(l) => l,
+            Err(e) => {
+                shade.destroy(ctx);
+                visibility.destroy(ctx);
+                pyramid.destroy(ctx);
+                return Err(e);
+            }
+        };
         let indirect = if planner.creates_indirect() {
             match IndirectPass::new(ctx, &pyramid, &shade, scene) {
                 Ok(i) => Some(i),
                 Err(e) => {
+                    if let Some(l) = local {
+                        l.destroy(ctx);
+                    }
                     shade.destroy(ctx);
                     visibility.destroy(ctx);
                     pyramid.destroy(ctx);
@@ -113,6 +131,7 @@ impl Renderer {
             pyramid,
             visibility,
             shade,
+            local,
             indirect,
             planner,
             heights_changed: true,
@@ -167,6 +186,7 @@ impl Renderer {
             Stage::VisibilityEnvironment => self.visibility.record_sets(rec, true),
             Stage::VisibilityKeyLights => self.visibility.record_sets(rec, false),
             Stage::ShadeDirect => self.shade.record(rec),
+            Stage::ShadeLocalLights => self.local.iter().for_each(|l| l.record(rec)),
             Stage::RadianceGather(b) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec, b)),
             Stage::RadianceDecimate(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_decimate(rec)),
             Stage::RadianceSynthesize(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_synthesize(rec)),
@@ -351,12 +371,16 @@ impl Renderer {
         self.pyramid.memory_bytes()
             + self.visibility.memory_bytes()
             + self.shade.memory_bytes()
+            + self.local.as_ref().map_or(0, |l| l.memory_bytes())
             + self.indirect.as_ref().map_or(0, |i| i.memory_bytes())
     }
 
     pub fn destroy(self, ctx: &Context) {
         if let Some(i) = self.indirect {
             i.destroy(ctx);
+        }
+        if let Some(l) = self.local {
+            l.destroy(ctx);
         }
         self.shade.destroy(ctx);
         self.visibility.destroy(ctx);

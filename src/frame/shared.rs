@@ -145,6 +145,22 @@ pub struct SweepPush {
     pub pad1: u32,
 }
 
+/// `hfgi_LocalPush`: push constants of the local lights' shading (`shade.local_lights`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct LocalPush {
+    pub width: u32,
+    pub height: u32,
+    /// Local-light slots.
+    pub light_count: u32,
+    /// `gi.local_light_azimuths`.
+    pub azimuths: u32,
+    pub texel_size: f32,
+    pub albedo_map: u32,
+    pub pad: [u32; 2],
+    pub albedo: [f32; 4],
+}
+
 /// `hfgi_ShadePush`: push constants of the direct shading pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -286,21 +302,30 @@ pub struct TruthPush {
     /// 1: march at `step`; 0: exact intersection with the bilinear patches.
     pub march: u32,
     /// 1: the dispatch integrates the key light `cap_*` over the cap-sample buffer's entries
-    /// `[azimuth_first, azimuth_first + azimuth_count)` (exact reference, direct light).
+    /// `[azimuth_first, azimuth_first + azimuth_count)` (exact reference, direct light);
+    /// 2: the local light `local_*` over its per-receiver samples `[azimuth_first,
+    /// azimuth_first + azimuth_count)` (both variants, direct light).
     pub cap: u32,
     /// 1: add to the output buffer; 0: overwrite it (the first dispatch of a pass).
     pub accumulate: u32,
-    pub pad0: u32,
+    /// Local light: azimuth samples of a cap holding no pole (the cap buffer's first
+    /// `local_nodes` entries, `(sin u, π/2·w·cos u)`).
+    pub local_nodes: u32,
     /// Key light: unit direction, `cos α` in `w`.
     pub cap_dir: [f32; 4],
-    /// Key light: RGB radiance, `sin α` in `w`.
+    /// Key light: RGB radiance, `sin α` in `w`; local light: RGB radiance.
     pub cap_radiance: [f32; 4],
+    /// Local light: centre, high f32 part (`xyz`); radius (`w`).
+    pub local_centre: [f32; 4],
+    /// Local light: centre minus the high part (`xyz`): the f64 centre split in two f32.
+    pub local_lo: [f32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<TruthPush>() == 96);
+const _: () = assert!(std::mem::size_of::<TruthPush>() == 128);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
+const _: () = assert!(std::mem::size_of::<LocalPush>() == 48);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);
 
@@ -405,6 +430,7 @@ mod layout_against_glsl {
             albedo,
             camera_lo
         });
+        layout!(LocalPush { width, height, light_count, azimuths, texel_size, albedo_map, albedo });
         layout!(IndirectPush {
             work_width,
             work_height,
@@ -441,8 +467,11 @@ mod layout_against_glsl {
             march,
             cap,
             accumulate,
+            local_nodes,
             cap_dir,
-            cap_radiance
+            cap_radiance,
+            local_centre,
+            local_lo
         });
         check(
             "Level",

@@ -52,6 +52,12 @@ pub const STAGES: &[StageInfo] = &[
         true,
     ),
     row(
+        "shade.local_lights",
+        "LocalLightPass",
+        "local lights, right after every shade.direct (adds their diffuse light to the direct planes it wrote)",
+        true,
+    ),
+    row(
         "radiance.gather",
         "RadiancePyramid (IndirectPass)",
         "per bounce: indirect light, and the heights changed or the indirect light is out of date (amortised: an \
@@ -121,6 +127,8 @@ pub enum Stage {
     VisibilityEnvironment,
     VisibilityKeyLights,
     ShadeDirect,
+    /// The local lights' diffuse light, added to what `ShadeDirect` wrote.
+    ShadeLocalLights,
     RadianceGather(u32),
     RadianceDecimate(u32),
     RadianceSynthesize(u32),
@@ -139,11 +147,12 @@ impl Stage {
             Stage::VisibilityEnvironment => 4,
             Stage::VisibilityKeyLights => 5,
             Stage::ShadeDirect => 6,
-            Stage::RadianceGather(_) => 7,
-            Stage::RadianceDecimate(_) => 8,
-            Stage::RadianceSynthesize(_) => 9,
-            Stage::IndirectScan(_) => 10,
-            Stage::IndirectShade(_) => 11,
+            Stage::ShadeLocalLights => 7,
+            Stage::RadianceGather(_) => 8,
+            Stage::RadianceDecimate(_) => 9,
+            Stage::RadianceSynthesize(_) => 10,
+            Stage::IndirectScan(_) => 11,
+            Stage::IndirectShade(_) => 12,
         }]
     }
 
@@ -177,6 +186,7 @@ mod tests {
             Stage::VisibilityEnvironment,
             Stage::VisibilityKeyLights,
             Stage::ShadeDirect,
+            Stage::ShadeLocalLights,
             Stage::RadianceGather(1),
             Stage::RadianceDecimate(1),
             Stage::RadianceSynthesize(1),

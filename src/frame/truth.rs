@@ -12,6 +12,16 @@
 //! light, by dispatches over that light's samples with its direction, `cos α`, `sin α` and
 //! radiance in the push constants (`cap = 1`), all accumulating into the output buffer.
 //!
+//! Local lights (both variants; [`crate::reference::local_truth`] is the f64 twin): their cap
+//! differs per receiver, so the shader forms it per texel (`cap = 2`, one light per dispatch:
+//! its centre as a high and a low f32, `(c_hi − P) + c_lo`, its radius and radiance in the push
+//! constants) and takes its azimuth samples from the first `cap_nodes` entries of the cap
+//! buffer (`(sin u, π/2·w·cos u)`, [`crate::reference::local_truth::cap_node_factors`]) or, for
+//! a cap holding a pole, the `A` uniform azimuths; the dispatches run over
+//! `max(A, cap_nodes)` samples, each texel skipping those beyond its own count. They accumulate
+//! `E = Σ L ∫ max(N·ω, 0) dω` into a region of the output buffer after the `W·H·n²` texels',
+//! which the host adds as `ρ/π · E` to the finished direct exit radiance, as the CPU does.
+//!
 //! This is a measuring tool, not a frame pass: it owns its buffers and submits on its own
 //! (`Context::submit_and_wait`).
 
@@ -22,6 +32,7 @@ use super::shared::TruthPush;
 use crate::error::Result;
 use crate::math::quadrature::gauss_legendre;
 use crate::reference::direct::normals;
+use crate::reference::local_truth::cap_node_factors;
 use crate::reference::truth::{albedo, environment_sh, key_caps, lighting_sh, Finisher, TruthOutput, TruthSettings};
 use crate::scene::model::Scene;
 use crate::shaders;
@@ -72,9 +83,35 @@ pub fn render_truth_gpu(
     render_truth_gpu_timed(ctx, scene, settings, progress).map(|(o, _)| o)
 }
 
+/// The cap buffer (binding 6): the local lights' azimuth factors
+/// ([`cap_node_factors`], `cap_nodes` entries, only when the scene has local lights), then every
+/// key light's samples `(φ, weight)`; and the index of the first key-light sample.
+fn cap_buffer(scene: &Scene, settings: &TruthSettings) -> (Vec<[f32; 2]>, u32) {
+    let mut out: Vec<[f32; 2]> = if scene.local_lights.is_empty() {
+        Vec::new()
+    } else {
+        cap_node_factors(settings.cap_nodes).iter().map(|(x, w)| [*x as f32, *w as f32]).collect()
+    };
+    let first_key = out.len() as u32;
+    out.extend(key_caps(scene, settings).iter().flat_map(|(_, s)| s.iter().map(|(p, wt)| [*p as f32, *wt as f32])));
+    if out.is_empty() {
+        out.push([0.0; 2]);
+    }
+    (out, first_key)
+}
+
+/// `v` as a high f32 and the f32 of what it leaves (`v ≈ hi + lo` to ~f64 precision).
+fn split(v: glam::DVec3) -> ([f32; 3], [f32; 3]) {
+    let hi = v.to_array().map(|x| x as f32);
+    let lo = [0, 1, 2].map(|k| (v[k] - hi[k] as f64) as f32);
+    (hi, lo)
+}
+
 /// The push constants of every dispatch of one pass over rows `[row, row + rows)` (texel-wide
 /// fields set, `indirect`/rows left to the caller): the environment's (or the bounce's)
-/// uniform azimuths in chunks, then, for the exact direct light, each key light's samples.
+/// uniform azimuths in chunks, then, for the exact direct light, each key light's samples,
+/// then, for the direct light of both variants, each local light's (the first of those with
+/// `accumulate = 0`: they have their own output region).
 fn pass_pushes(scene: &Scene, settings: &TruthSettings, indirect: bool, chunk: u32) -> Vec<TruthPush> {
     let (w, h) = (scene.field.width(), scene.field.height());
     let base = TruthPush {
@@ -101,7 +138,7 @@ fn pass_pushes(scene: &Scene, settings: &TruthSettings, indirect: bool, chunk: u
     };
     add(base, 0, settings.azimuths);
     if !indirect {
-        let mut offset = 0u32;
+        let mut offset = cap_buffer(scene, settings).1;
         for (key, samples) in key_caps(scene, settings) {
             let l = key.direction.normalize();
             let (sin_a, cos_a) = key.angular_radius.sin_cos();
@@ -116,7 +153,25 @@ fn pass_pushes(scene: &Scene, settings: &TruthSettings, indirect: bool, chunk: u
             offset += samples.len() as u32;
         }
     }
+    if !indirect {
+        for light in &scene.local_lights {
+            let (hi, lo) = split(light.position);
+            let r = light.radiance;
+            let push = TruthPush {
+                cap: 2,
+                local_nodes: settings.cap_nodes,
+                cap_radiance: [r[0] as f32, r[1] as f32, r[2] as f32, 0.0],
+                local_centre: [hi[0], hi[1], hi[2], light.radius as f32],
+                local_lo: [lo[0], lo[1], lo[2], 0.0],
+                ..base
+            };
+            add(push, 0, settings.azimuths.max(settings.cap_nodes));
+        }
+    }
     out[0].accumulate = 0;
+    if let Some(first) = out.iter_mut().find(|p| p.cap == 2) {
+        first.accumulate = 0;
+    }
     out
 }
 
@@ -136,11 +191,7 @@ pub fn render_truth_gpu_timed(
     let (gx, gw) = gauss_legendre(settings.nodes as usize);
     let gauss: Vec<[f32; 2]> = gx.iter().zip(&gw).map(|(x, wt)| [*x as f32, *wt as f32]).collect();
     let light32: Vec<[f32; 4]> = light.iter().map(|l| [l[0] as f32, l[1] as f32, l[2] as f32, 0.0]).collect();
-    let mut caps: Vec<[f32; 2]> =
-        key_caps(scene, settings).iter().flat_map(|(_, s)| s.iter().map(|(p, wt)| [*p as f32, *wt as f32])).collect();
-    if caps.is_empty() {
-        caps.push([0.0; 2]);
-    }
+    let caps = cap_buffer(scene, settings).0;
     let consts = super::shade::constants(n, 1.0, 0);
     let usage =
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -154,7 +205,8 @@ pub fn render_truth_gpu_timed(
             ("hfgi.truth.source", (w * h * 16) as u64),
             ("hfgi.truth.gauss", (gauss.len() * 8) as u64),
             ("hfgi.truth.consts", (consts.len() * 4) as u64),
-            ("hfgi.truth.out", (w * h * n * n * 16) as u64),
+            // Per texel n² vec4, then the local lights' E (one vec4 per texel).
+            ("hfgi.truth.out", (w * h * (n * n + 1) * 16) as u64),
             ("hfgi.truth.caps", (caps.len() * 8) as u64),
         ] {
             bufs.push(Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)?);
@@ -265,7 +317,8 @@ impl Passes<'_> {
             *done += rows as u64;
             progress(*done, total);
         }
-        let raw = memory::download_f32(ctx, &self.bufs[5], 0, (w * h * n2 * 4) as u64)?;
+        let locals = !indirect && !scene.local_lights.is_empty();
+        let raw = memory::download_f32(ctx, &self.bufs[5], 0, (w * h * (n2 + locals as usize) * 4) as u64)?;
         let (nrm, rho) = (normals(scene), albedo(scene));
         let finish = Finisher::new(scene, settings.sh_visibility);
         Ok((0..w * h)
@@ -276,7 +329,15 @@ impl Passes<'_> {
                         [raw[o] as f64, raw[o + 1] as f64, raw[o + 2] as f64]
                     })
                     .collect();
-                finish.texel(indirect, &texel, nrm[t], rho[t])
+                let mut out = finish.texel(indirect, &texel, nrm[t], rho[t]);
+                if locals {
+                    // The local lights' E: ρ/π · E onto the direct exit radiance.
+                    let o = (w * h * n2 + t) * 4;
+                    for c in 0..3 {
+                        out[c] += rho[t][c] / std::f64::consts::PI * raw[o + c] as f64;
+                    }
+                }
+                out
             })
             .collect())
     }

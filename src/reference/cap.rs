@@ -19,9 +19,13 @@ use crate::scene::model::KeyLight;
 /// azimuth range). `azimuths`: the uniform count for a cap holding a pole; `nodes`: the
 /// Gauss–Legendre nodes of the substitution otherwise.
 pub fn cap_azimuths(key: &KeyLight, azimuths: u32, nodes: u32) -> Vec<(f64, f64)> {
-    let l = key.direction.normalize();
+    cap_azimuths_toward(key.direction.normalize(), key.angular_radius.sin(), azimuths, nodes)
+}
+
+/// [`cap_azimuths`] of the cap toward unit direction `l` with `sin α = sin_a` (a local light
+/// seen from one receiver: `l = (c − p)/‖c − p‖`, `sin α = r/‖c − p‖`; docs/local-lights.md).
+pub fn cap_azimuths_toward(l: glam::DVec3, sin_a: f64, azimuths: u32, nodes: u32) -> Vec<(f64, f64)> {
     let cos_e = l.x.hypot(l.y);
-    let sin_a = key.angular_radius.sin();
     if cos_e <= sin_a {
         let dphi = 2.0 * PI / azimuths as f64;
         return (0..azimuths).map(|a| ((a as f64 + 0.5) * dphi, dphi)).collect();

@@ -409,6 +409,10 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
             incident.push(tr);
         }
     }
+    // The local lights' diffuse exit radiance (stage shade.local_lights, docs/local-lights.md).
+    for (d, l) in direct.iter_mut().zip(super::local::local_exitance(scene, &normals)) {
+        *d = [d[0] + l[0], d[1] + l[1], d[2] + l[2]];
+    }
     let total = direct.iter().zip(&glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
     Ok(DirectOutput {
         width: w,

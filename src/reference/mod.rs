@@ -3,6 +3,8 @@
 pub mod cap;
 pub mod direct;
 pub mod indirect;
+pub mod local;
+pub mod local_truth;
 pub mod max;
 pub mod pyramid;
 pub mod ray;

@@ -258,7 +258,19 @@ fn piece_max(t0: f64, t1: f64, a: f64, b: f64, c: f64) -> f64 {
 /// unit `d` from level-0 position `p`; None where the ray leaves the field at once.
 pub fn near_slope(scan: &Scan, p: [f64; 2], d: [f64; 2], reach: f64) -> Option<f64> {
     let l0 = scan.pyr.layout.levels[0];
-    let n = [l0.width as f64, l0.height as f64];
+    near_slope_on([l0.width as f64, l0.height as f64], p, d, reach, |x, y| scan.height0(x, y))
+}
+
+/// [`near_slope`] over any surface `height(x, y)` of a field of `n` texels per axis (the
+/// local lights read the raw bilinear heights: `reference::local`). One quadratic per level-0
+/// cell the ray crosses, exact on a bilinear surface.
+pub fn near_slope_on(
+    n: [f64; 2],
+    p: [f64; 2],
+    d: [f64; 2],
+    reach: f64,
+    height: impl Fn(f64, f64) -> f64,
+) -> Option<f64> {
     let exit = |k: usize| {
         if d[k] > 0.0 {
             (n[k] - 1.0 - p[k]) / d[k]
@@ -278,8 +290,8 @@ pub fn near_slope(scan: &Scan, p: [f64; 2], d: [f64; 2], reach: f64) -> Option<f
         let dist = if d[k] > 0.0 { p[k].floor() + 1.0 - p[k] } else { p[k] - p[k].ceil() + 1.0 };
         dist * step(k)
     };
-    let base = scan.height0(p[0], p[1]);
-    let f = |t: f64| scan.height0(p[0] + t * d[0], p[1] + t * d[1]) - base;
+    let base = height(p[0], p[1]);
+    let f = |t: f64| height(p[0] + t * d[0], p[1] + t * d[1]) - base;
     let (mut tx, mut ty) = (first(0), first(1));
     let (mut ta, mut fa) = (0.0, 0.0);
     let mut best = f64::NEG_INFINITY;

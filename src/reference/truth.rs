@@ -15,7 +15,10 @@
 //! - lighting, exact variant: the order-n SH of the environment as given plus each key light
 //!   as its true cap ([`super::cap`]: its own azimuth samples and, on each, its elevation
 //!   window intersected with the open interval); SH-visibility variant: environment plus the
-//!   caps' SH projections ([`lighting_sh`]).
+//!   caps' SH projections ([`lighting_sh`]);
+//! - local lights, both variants: the true sphere ([`super::local_truth`]: a direction sees it
+//!   iff its ray reaches the sphere before the height field), `ρ/π · E` added to the direct
+//!   exit radiance, which the bounces then take as their source.
 //!
 //! Two variants: *exact* (`L_o = ρ/π ∫ L_in max(N·ω, 0) dω`) and *SH-visibility* (exact
 //! visibility and indirect radiance projected to order n, then shaded as the pipeline does:
@@ -28,6 +31,7 @@ use glam::DVec3;
 
 use super::cap::{cap_azimuths, cap_window};
 use super::direct::normals;
+use super::local_truth::LocalTruth;
 pub use super::ray::bilinear;
 use super::ray::{first_hits, horizon_slope, march, pieces, Piece, Surface};
 use super::sh_eval::ShBasis;
@@ -236,12 +240,13 @@ pub fn albedo(scene: &Scene) -> Vec<[f64; 3]> {
         .collect()
 }
 
-fn direction(omega: f64, phi: f64) -> DVec3 {
+/// The unit direction of elevation `omega` and azimuth `phi`.
+pub(super) fn direction(omega: f64, phi: f64) -> DVec3 {
     DVec3::new(omega.cos() * phi.cos(), omega.cos() * phi.sin(), omega.sin())
 }
 
 /// Gauss–Legendre nodes and weights on `[a, b]`.
-fn nodes_on(gauss: &(Vec<f64>, Vec<f64>), a: f64, b: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
+pub(super) fn nodes_on(gauss: &(Vec<f64>, Vec<f64>), a: f64, b: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
     gauss.0.iter().zip(&gauss.1).map(move |(x, wt)| (0.5 * (a + b) + 0.5 * (b - a) * x, 0.5 * (b - a) * wt))
 }
 
@@ -425,7 +430,25 @@ pub fn render_truth(
         }
         out
     };
-    let direct = pass(false, &|i, j| setup.direct(i, j));
+    let mut direct = pass(false, &|i, j| setup.direct(i, j));
+    // Local lights (both variants): ρ/π · E added to the direct exit radiance, before the
+    // bounces take it as their source.
+    if !scene.local_lights.is_empty() {
+        let local = LocalTruth {
+            lights: &scene.local_lights,
+            settings,
+            surf: setup.surface(),
+            texel_size: scene.texel_size,
+            nrm: &setup.nrm,
+            gauss: &setup.gauss,
+        };
+        for (p, out) in direct.iter_mut().enumerate() {
+            let e = local.irradiance(p % w, p / w);
+            for c in 0..3 {
+                out[c] += rho[p][c] / PI * e[c];
+            }
+        }
+    }
     // Diffuse bounces: radiance of the previous bounce at the first hit.
     let mut source = direct.clone();
     let mut indirect_bounces = Vec::new();

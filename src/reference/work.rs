@@ -19,7 +19,9 @@ const LAVAPIPE_NS_PER_STEP: f64 = 30.0;
 pub struct TruthWork {
     /// Receivers (every texel).
     pub receivers: f64,
-    /// Rays per receiver and pass: the uniform azimuths plus each key light's cap azimuths.
+    /// Rays per receiver and pass: the uniform azimuths plus each key light's cap azimuths
+    /// plus, per local light, `max(azimuths, cap_nodes)` (its cap's samples: `cap_nodes`, or
+    /// the uniform azimuths where it holds a pole; both variants).
     pub rays: f64,
     /// Passes: the direct light and each bounce.
     pub passes: f64,
@@ -44,9 +46,10 @@ impl TruthSettings {
         let reach = if scene.wrap { w.max(h) } else { w.hypot(h) };
         let steps_per_ray = if self.march { reach / self.step } else { reach * std::f64::consts::SQRT_2 };
         let caps = if self.sh_visibility { 0.0 } else { scene.key_lights.len() as f64 * f64::from(self.cap_nodes) };
+        let locals = scene.local_lights.len() as f64 * f64::from(self.azimuths.max(self.cap_nodes));
         TruthWork {
             receivers: w * h,
-            rays: f64::from(self.azimuths) + caps,
+            rays: f64::from(self.azimuths) + caps + locals,
             passes: 1.0 + f64::from(scene.gi.bounces),
             steps_per_ray,
         }
@@ -125,6 +128,24 @@ mod tests {
         let wide = TruthSettings { azimuths: 4096, ..TruthSettings::default() };
         let msg = wide.check_work(&big).unwrap_err().to_string();
         assert!(msg.contains("--azimuths"), "{msg}");
+    }
+
+    #[test]
+    fn local_lights_count_in_the_work() {
+        let mut scene = crate::scene::file::parse_scene(
+            "[[local_light]]\nposition = [4.0, 4.0, 3.0]\n",
+            std::path::Path::new("."),
+            "t",
+            &["heightfield.size=32".into()],
+        )
+        .unwrap();
+        let settings = TruthSettings::default();
+        let shv = TruthSettings { sh_visibility: true, ..settings };
+        let (with, with_shv) = (settings.work(&scene).rays, shv.work(&scene).rays);
+        scene.local_lights.clear();
+        // max(256 azimuths, 64 cap nodes) per local light, in both variants.
+        assert_eq!(with - settings.work(&scene).rays, 256.0);
+        assert_eq!(with_shv - shv.work(&scene).rays, 256.0);
     }
 
     #[test]

@@ -38,8 +38,8 @@ use crate::scene::heightfield::DEFAULT_MAX_DIM;
 use crate::scene::load::{load_heightfield_meta, LoadOptions};
 use crate::scene::model::limits;
 use crate::scene::model::{
-    Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, Material, PyramidMode, Quality,
-    Scene,
+    Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, LocalLight, Material, PyramidMode,
+    Quality, Scene,
 };
 use crate::scene::HeightField;
 
@@ -53,6 +53,8 @@ pub const DEFAULT_KEY_ELEVATION_DEG: f64 = envmap::SKY_SUN_ELEVATION_DEG;
 pub const DEFAULT_KEY_AZIMUTH_DEG: f64 = envmap::SKY_SUN_AZIMUTH_DEG;
 /// Default key light angular radius (degrees).
 pub const DEFAULT_KEY_RADIUS_DEG: f64 = 3.0;
+/// Default radiance of a `[[local_light]]` (a warm lantern).
+pub const DEFAULT_LOCAL_RADIANCE: [f64; 3] = [40.0, 28.0, 12.0];
 /// Default key light radiance: a warm white chosen so that, on a horizontal surface, the default
 /// key light's irradiance (`L·π·sin²α·sin(elevation)` = 2.31 in luminance) about equals the
 /// `sky` preset's (2.29); see `docs/scene-format.md`.
@@ -176,7 +178,7 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let mut doc: Table = toml::from_str(text).map_err(|e| {
         ctx.err(None, crate::error::shorten_lines(e.to_string().trim_end(), crate::error::ECHO_MAX_CHARS))
     })?;
-    if !doc.contains_key("environment") && !doc.contains_key("key_light") {
+    if !doc.contains_key("environment") && !doc.contains_key("key_light") && !doc.contains_key("local_light") {
         doc.insert("environment".into(), Value::Table(Table::new()));
         doc.insert("key_light".into(), Value::Array(vec![Value::Table(Table::new())]));
     }
@@ -195,11 +197,13 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let material = ctx.material(raw.material.as_ref(), &field)?;
     let environment = ctx.environment(raw.environment.as_ref())?;
     let key_lights = ctx.key_lights(raw.key_light.as_deref().unwrap_or(&[]))?;
+    let local_lights = ctx.local_lights(raw.local_light.as_deref().unwrap_or(&[]), texel_size)?;
     let gi = ctx.gi(raw.gi.as_ref())?;
     let camera = ctx.camera(raw.camera.as_ref(), &field, texel_size)?;
     let animation = ctx.animation(raw.animation.as_ref(), wrap)?;
     crate::scene::model::check_sweep(wrap, &gi).map_err(|e| ctx.wrap("gi.visibility", e))?;
-    Ok(Scene { field, texel_size, wrap, material, environment, key_lights, gi, camera, animation })
+    crate::scene::model::check_local_wrap(wrap, local_lights.len()).map_err(|e| ctx.wrap("local_light", e))?;
+    Ok(Scene { field, texel_size, wrap, material, environment, key_lights, local_lights, gi, camera, animation })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -213,6 +217,7 @@ struct RawScene {
     material: Option<Table>,
     environment: Option<Table>,
     key_light: Option<Vec<Table>>,
+    local_light: Option<Vec<Table>>,
     gi: Option<Table>,
     camera: Option<Table>,
     animation: Option<Table>,
@@ -264,10 +269,19 @@ struct RawKeyLight {
 
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
+struct RawLocalLight {
+    position: Option<[f64; 3]>,
+    radius: Option<f64>,
+    radiance: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
 struct RawGi {
     sh_order: Option<u32>,
     azimuths: Option<u32>,
     key_light_azimuths: Option<u32>,
+    local_light_azimuths: Option<u32>,
     level_step: Option<u32>,
     level_offset: Option<u32>,
     subsample: Option<u32>,
@@ -935,6 +949,49 @@ impl Ctx<'_> {
         Ok(out)
     }
 
+    /// `[[local_light]]` tables: `position` is required; `radius` defaults to one texel,
+    /// `radiance` to [`DEFAULT_LOCAL_RADIANCE`].
+    fn local_lights(&self, tables: &[Table], texel_size: f64) -> Result<Vec<LocalLight>> {
+        let mut out = Vec::with_capacity(tables.len());
+        for (i, t) in tables.iter().enumerate() {
+            let path = format!("local_light.{i}");
+            let raw: RawLocalLight = self.de_table(t, &path)?;
+            let key = |k: &str| format!("{path}.{k}");
+            let c = limits::MAX_COORDINATE;
+            let Some(position) = raw.position else {
+                return Err(self
+                    .err(Some(&key("position")), format!("{path}: `position = [x, y, z]` (world units) is required")));
+            };
+            if !position.iter().all(|v| v.is_finite() && v.abs() <= c) {
+                return Err(self.invalid(
+                    &key("position"),
+                    fmt_list(&position),
+                    format!("[x, y, z], each within ±{c:e}"),
+                ));
+            }
+            let radius = raw.radius.unwrap_or(texel_size);
+            let (lo, hi) = limits::LOCAL_RADIUS_TEXELS;
+            let (lo, hi) = (lo * texel_size, hi * texel_size);
+            if !(radius.is_finite() && radius >= lo && radius <= hi) {
+                return Err(self.invalid(
+                    &key("radius"),
+                    radius,
+                    format!("a number in [{lo:e}, {hi:e}] (world units)"),
+                ));
+            }
+            let m = limits::MAX_RADIANCE;
+            let radiance = self.rgb(
+                &key("radiance"),
+                raw.radiance.unwrap_or(DEFAULT_LOCAL_RADIANCE),
+                0.0,
+                m,
+                &format!("[r, g, b] with each component in [0, {m:e}]"),
+            )?;
+            out.push(LocalLight { position: DVec3::from_array(position), radius, radiance });
+        }
+        Ok(out)
+    }
+
     fn gi(&self, t: Option<&Table>) -> Result<GiSettings> {
         let raw: RawGi = self.de_opt(t, "gi")?;
         let param = |e: Error| self.wrap("gi", e);
@@ -947,6 +1004,7 @@ impl Ctx<'_> {
             sh_order: raw.sh_order.map_or(d.sh_order, |v| v as usize),
             azimuths: raw.azimuths.unwrap_or(d.azimuths),
             key_light_azimuths: raw.key_light_azimuths.unwrap_or(d.key_light_azimuths),
+            local_light_azimuths: raw.local_light_azimuths.unwrap_or(d.local_light_azimuths),
             level_step: raw.level_step.unwrap_or(d.level_step),
             level_offset: raw.level_offset.unwrap_or(d.level_offset),
             subsample: raw.subsample.unwrap_or(d.subsample),

@@ -219,6 +219,19 @@ pub fn check_sweep(wrap: bool, gi: &GiSettings) -> Result<()> {
     Ok(())
 }
 
+/// Local lights need a non-periodic field (a periodic one would need every light repeated on
+/// the torus; docs/local-lights.md).
+pub fn check_local_wrap(wrap: bool, local_lights: usize) -> Result<()> {
+    if wrap && local_lights > 0 {
+        return Err(Error::param(
+            "local_light",
+            format!("{local_lights} local light(s) on a periodic field"),
+            "a non-periodic field (heightfield.wrap = false): local lights are not repeated across a periodic field",
+        ));
+    }
+    Ok(())
+}
+
 /// Algorithm settings (`[gi]`). Defaults are the paper's (§9).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GiSettings {
@@ -228,6 +241,8 @@ pub struct GiSettings {
     pub azimuths: u32,
     /// Azimuthal samples per key light, 2..=64.
     pub key_light_azimuths: u32,
+    /// Azimuthal samples per local light and receiver, 2..=64 (docs/local-lights.md).
+    pub local_light_azimuths: u32,
     /// Pyramid level step k_v, 1..=32.
     pub level_step: u32,
     /// Level offset o_v, 0..=8.
@@ -301,6 +316,7 @@ impl GiSettings {
             sh_order: n,
             azimuths: m,
             key_light_azimuths: 3,
+            local_light_azimuths: 8,
             level_step: k,
             level_offset: o,
             subsample: sub,
@@ -331,6 +347,7 @@ impl GiSettings {
         GiSettings {
             bounces: self.bounces,
             key_light_azimuths: self.key_light_azimuths,
+            local_light_azimuths: self.local_light_azimuths,
             pyramid: self.pyramid,
             glossy_pyramid: self.glossy_pyramid,
             amortize: self.amortize,
@@ -433,6 +450,19 @@ pub struct KeyLight {
     pub radiance: [f64; 3],
 }
 
+/// `[[local_light]]`: a sphere of uniform radiance at a finite distance (CONVENTIONS.md
+/// "Lighting"; docs/local-lights.md). From a point at distance `d > r` from its centre it
+/// subtends a cap of half-angle `asin(r/d)`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LocalLight {
+    /// World position of the centre.
+    pub position: DVec3,
+    /// Radius in world units (> 0).
+    pub radius: f64,
+    /// Uniform RGB radiance of its surface.
+    pub radiance: [f64; 3],
+}
+
 /// `[camera]`: a pinhole camera for the view image and for view-dependent (glossy) shading.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
@@ -500,6 +530,9 @@ pub mod limits {
     /// `animation.radius` range (bumps), fraction of the width (a radius that rounds to 0
     /// divides by zero in the bump profile).
     pub const BUMP_RADIUS: (f64, f64) = (1e-3, 1.0);
+    /// `local_light.N.radius` range as a multiple of the texel size (a radius that rounds to
+    /// 0 in f32 would make a zero-size light; one over 10⁶ texels is no longer local).
+    pub const LOCAL_RADIUS_TEXELS: (f64, f64) = (1e-3, 1e6);
     /// Largest |azimuth| in degrees (`key_light.N.azimuth_deg`).
     pub const MAX_AZIMUTH_DEG: f64 = 360.0;
     /// Largest |world units per simulation unit| of the water (`animation.scale`), and of it
@@ -593,6 +626,43 @@ impl KeyLight {
     }
 }
 
+impl LocalLight {
+    /// Local light `k` of a scene of texel size `texel_size`: radiance in [0,
+    /// [`limits::MAX_RADIANCE`]], a position within ±[`limits::MAX_COORDINATE`], a radius of
+    /// [`limits::LOCAL_RADIUS_TEXELS`] texels.
+    pub fn check(&self, k: usize, texel_size: f64) -> Result<()> {
+        let m = limits::MAX_RADIANCE;
+        if !self.radiance.iter().all(|v| within(*v, 0.0, m)) {
+            return Err(Error::param(
+                format!("local light {k} radiance"),
+                format!("{:?}", self.radiance),
+                format!("each in [0, {m:e}]"),
+            ));
+        }
+        let c = limits::MAX_COORDINATE;
+        if !self.position.to_array().iter().all(|x| within(*x, -c, c)) {
+            return Err(Error::param(
+                format!("local light {k} position"),
+                format!("{:?}", self.position),
+                format!("each coordinate within ±{c:e}"),
+            ));
+        }
+        let (lo, hi) = limits::LOCAL_RADIUS_TEXELS;
+        if !within(self.radius, lo * texel_size, hi * texel_size) {
+            return Err(Error::param(
+                format!("local light {k} radius"),
+                self.radius,
+                format!(
+                    "a number in [{:e}, {:e}] world units ({lo:e}..{hi:e} texels)",
+                    lo * texel_size,
+                    hi * texel_size
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Material {
     /// The Phong exponent within [`limits::EXPONENT`], specular within [0,
     /// [`limits::MAX_SPECULAR`]], a constant albedo finite and ≥ 0.
@@ -643,6 +713,8 @@ pub struct Scene {
     pub material: Material,
     pub environment: Environment,
     pub key_lights: Vec<KeyLight>,
+    /// `[[local_light]]`s (docs/local-lights.md).
+    pub local_lights: Vec<LocalLight>,
     pub gi: GiSettings,
     pub camera: Camera,
     /// `[animation]`: what moves (`Animation::None` for a static scene).
@@ -664,6 +736,10 @@ impl Scene {
         for (k, l) in self.key_lights.iter().enumerate() {
             l.check(k)?;
         }
+        for (k, l) in self.local_lights.iter().enumerate() {
+            l.check(k, self.texel_size)?;
+        }
+        check_local_wrap(self.wrap, self.local_lights.len())?;
         self.material.check()?;
         self.camera.check()?;
         check_sweep(self.wrap, &self.gi)
@@ -683,6 +759,7 @@ impl GiSettings {
         check("gi.sh_order", u32::try_from(self.sh_order).unwrap_or(u32::MAX), 2, crate::constants::MAX_SH_ORDER)?;
         check("gi.azimuths", self.azimuths, 4, 256)?;
         check("gi.key_light_azimuths", self.key_light_azimuths, 2, 64)?;
+        check("gi.local_light_azimuths", self.local_light_azimuths, 2, 64)?;
         check("gi.level_step", self.level_step, 1, 32)?;
         check("gi.level_offset", self.level_offset, 0, 8)?;
         if ![1, 2, 4].contains(&self.subsample) {

@@ -41,6 +41,7 @@ pub fn scene(field: HeightField) -> Scene {
         material: Material { albedo: Albedo::Constant([0.7, 0.6, 0.5]), specular: None, exponent: 32.0 },
         environment: sky(8),
         key_lights: vec![key_light(30.0, 200.0, 5.0, 4.0)],
+        local_lights: vec![],
         gi: GiSettings::default(),
         camera,
         animation: Default::default(),

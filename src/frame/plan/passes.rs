@@ -36,7 +36,7 @@ impl Planner {
         if self.key_lights > 0 {
             sets.push(format!("{} key light{}", self.key_lights, plural(self.key_lights)));
         }
-        let sets = if sets.is_empty() { "no lights: the direct light is black".into() } else { sets.join(", ") };
+        let sets = if sets.is_empty() { "no environment or key light".into() } else { sets.join(", ") };
         let mut passes = vec![
             PlannedPass {
                 name: "HeightPyramid",
@@ -59,6 +59,20 @@ impl Planner {
                 name: "ShadePass",
                 created: true,
                 reason: "always: the shading texture (total, direct, indirect, glossy)".into(),
+            },
+            PlannedPass {
+                name: "LocalLightPass",
+                created: self.local_lights > 0,
+                reason: if self.local_lights > 0 {
+                    format!(
+                        "{} local light{}: horizons marched up to each light, {} azimuths per light and texel",
+                        self.local_lights,
+                        plural(self.local_lights),
+                        self.local_light_azimuths
+                    )
+                } else {
+                    "no local lights".into()
+                },
             },
         ];
         match self.no_indirect() {

@@ -1,0 +1,169 @@
+#version 460
+// Local spherical lights (stage `shade.local_lights`; docs/local-lights.md, after SN08 thesis
+// §4.3, seed 002): per full-resolution texel and light, the cap of half-angle asin(r/d) toward
+// the light's centre is cut into azimuth slices (Gauss–Legendre in φ = φ_c + β sin u, or
+// uniform azimuths when the cap holds the zenith); on each slice the cap's elevation window is
+// intersected with the open interval above the horizon — the exact horizon of the bilinear
+// surface along the slice, marched only up to where the slice's central ray enters the sphere
+// (eq. 4.24: nothing behind the light shadows it; the horizon may be below zero, eq. 4.23) —
+// and above the tangent elevation, and the clamped cosine is integrated over it in closed
+// form. The diffuse exit radiance ρ/π · Σ_lights L · E_l is added to the direct and total
+// planes that shade.direct has just written (the indirect bounces then carry it).
+// Twin: reference::local::local_exitance.
+#include "hfgi_shared.glsl"
+#include "hfgi_near.glsl"
+layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
+
+layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };  // level 0 = absolute heights, W×H
+layout(std430, binding = 1) readonly buffer Lights { vec4 hfgi_lights[]; };  // per slot: (c_hi, r), (c_lo, 0), (L, 0)
+layout(std430, binding = 2) readonly buffer Nodes { vec2 hfgi_nodes[]; };    // Gauss–Legendre (x, w) on [−1, 1]
+layout(std430, binding = 3) readonly buffer Albedo { vec4 hfgi_albedo[]; };  // per texel (albedo_map)
+layout(std430, binding = 4) buffer Out { vec4 hfgi_out[]; };                 // the shading planes
+layout(push_constant) uniform Push { hfgi_LocalPush pc; };
+
+const float HFGI_PI = 3.14159265358979;
+const float HFGI_HALF_PI = 1.5707963267948966;
+
+float height(int x, int y) {
+    return hfgi_levels[uint(y) * pc.width + uint(x)];
+}
+
+// The bilinear surface at level-0 position q (clamped to the field).
+float bilinear(vec2 q) {
+    vec2 c = clamp(q, vec2(0.0), vec2(pc.width - 1u, pc.height - 1u));
+    ivec2 i = min(ivec2(floor(c)), ivec2(pc.width - 2u, pc.height - 2u));
+    vec2 f = c - vec2(i);
+    float a = mix(height(i.x, i.y), height(i.x + 1, i.y), f.x);
+    float b = mix(height(i.x, i.y + 1), height(i.x + 1, i.y + 1), f.x);
+    return mix(a, b, f.y);
+}
+
+// CONVENTIONS.md normals: central differences inside, one-sided at the border.
+vec3 normal_at(ivec2 p) {
+    int w = int(pc.width), h = int(pc.height);
+    int x0 = max(p.x - 1, 0), x1 = min(p.x + 1, w - 1), y0 = max(p.y - 1, 0), y1 = min(p.y + 1, h - 1);
+    float hx = (height(x1, p.y) - height(x0, p.y)) / (float(x1 - x0) * pc.texel_size);
+    float hy = (height(p.x, y1) - height(p.x, y0)) / (float(y1 - y0) * pc.texel_size);
+    return normalize(vec3(-hx, -hy, 1.0));
+}
+
+// sup F(t)/t for t ∈ (0, reach] texels along unit d from texel p, F the bilinear height above
+// p's (world units): one quadratic per cell the ray crosses, exact on the bilinear surface
+// (as the sweep's near field, hfgi_near_slope). False where the ray leaves the field at once.
+// Twin: reference::sweep::near_slope_on.
+bool hfgi_local_slope(vec2 p, vec2 d, float reach, out float best) {
+    best = -1e30;
+    vec2 n = vec2(pc.width, pc.height);
+    float ex = d.x > 0.0 ? (n.x - 1.0 - p.x) / d.x : (d.x < 0.0 ? p.x / -d.x : 1e30);
+    float ey = d.y > 0.0 ? (n.y - 1.0 - p.y) / d.y : (d.y < 0.0 ? p.y / -d.y : 1e30);
+    float t_end = min(reach, min(ex, ey));
+    if (t_end <= 0.0) return false;
+    vec2 stp = vec2(abs(d.x) > 1e-6 ? 1.0 / abs(d.x) : 1e30, abs(d.y) > 1e-6 ? 1.0 / abs(d.y) : 1e30);
+    vec2 dist = vec2(d.x > 0.0 ? floor(p.x) + 1.0 - p.x : p.x - ceil(p.x) + 1.0,
+                     d.y > 0.0 ? floor(p.y) + 1.0 - p.y : p.y - ceil(p.y) + 1.0);
+    vec2 tn = dist * stp;
+    float base = bilinear(p);
+    float ta = 0.0, fa = 0.0;
+    for (int guard = 0; guard < 4 * int(t_end) + 8; ++guard) {
+        float tb = min(min(tn.x, tn.y), t_end);
+        if (tb > ta + 1e-6) {
+            float len = tb - ta;
+            float fm = bilinear(p + (ta + 0.5 * len) * d) - base;
+            float fb = bilinear(p + tb * d) - base;
+            float a = 2.0 * (fb - 2.0 * fm + fa) / (len * len);
+            float b = (fb - fa) / len - a * len;
+            best = max(best, hfgi_piece_max(ta, tb, a, b, fa));
+            fa = fb;
+            ta = tb;
+        }
+        if (tb >= t_end) break;
+        if (tn.x <= tb) tn.x += stp.x;
+        if (tn.y <= tb) tn.y += stp.y;
+    }
+    return true;
+}
+
+// The cap's elevation window [ω_c − δ, ω_c + δ] on the half-plane of azimuth direction d;
+// false where it misses the cap. Twin: reference::cap::cap_window.
+bool cap_window(vec2 d, vec3 l, float sin_a, float cos_a, out float lo, out float hi) {
+    float dl = dot(d, l.xy);
+    float cr = d.x * l.y - d.y * l.x;
+    float x = sin_a * sin_a - cr * cr;
+    if (x < 0.0) return false;
+    float r = length(vec2(dl, l.z));
+    float delta = 2.0 * asin(min(sqrt(x / ((r + cos_a) * 2.0 * r)), 1.0));
+    float wc = atan(l.z, dl);
+    lo = wc - delta;
+    hi = wc + delta;
+    return true;
+}
+
+// ∫_a^b (N·ω) cos ω dω on the half-plane of azimuth d (h = N·(d, 0)), N·ω ≥ 0 on [a, b].
+float slice(float h, float nz, float a, float b) {
+    float sa = sin(a), ca = cos(a), sb = sin(b), cb = cos(b);
+    return 0.5 * h * ((b - a) + sb * cb - sa * ca) + 0.5 * nz * (sb * sb - sa * sa);
+}
+
+// Irradiance E / L of one light (centre C relative to the texel, radius r) at texel p, normal N.
+float light_irradiance(vec2 p, vec3 N, vec3 C, float r) {
+    float d = length(C);
+    bool inside = d <= r;
+    float sin_a = inside ? 1.0 : r / d;
+    float cos_a = inside ? 0.0 : sqrt((d - r) * (d + r)) / d;
+    vec3 l = C / d;
+    float cos_e = length(l.xy);
+    bool pole = cos_e <= sin_a;
+    float phi_c = atan(l.y, l.x);
+    float beta = pole ? 0.0 : asin(min(sin_a / cos_e, 1.0));
+    float E = 0.0;
+    for (uint k = 0u; k < pc.azimuths; ++k) {
+        float phi, w;
+        if (pole) {
+            w = 2.0 * HFGI_PI / float(pc.azimuths);
+            phi = (float(k) + 0.5) * w;
+        } else {
+            vec2 node = hfgi_nodes[k];
+            float u = HFGI_HALF_PI * node.x;
+            phi = phi_c + beta * sin(u);
+            w = HFGI_HALF_PI * node.y * beta * cos(u);
+        }
+        vec2 dir = vec2(cos(phi), sin(phi));
+        float lo, hi;
+        if (!cap_window(dir, l, sin_a, cos_a, lo, hi)) continue;
+        float h = dot(N.xy, dir);
+        float a = max(max(lo, atan(-h, N.z)), -HFGI_HALF_PI), b = min(hi, HFGI_HALF_PI);
+        if (b <= a) continue;
+        // Reach: where the slice's central ray (the middle of its window below the zenith)
+        // enters the sphere, in planar texels; 0 inside the sphere.
+        float wc = 0.5 * (lo + b);
+        vec3 u3 = vec3(cos(wc) * dir, sin(wc));
+        float bc = dot(u3, C);
+        float t = inside ? 0.0 : bc - sqrt(max(bc * bc - (d - r) * (d + r), 0.0));
+        float reach = max(t, 0.0) * cos(wc) / pc.texel_size;
+        float best;
+        if (reach > 0.0 && hfgi_local_slope(p, dir, reach, best)) a = max(a, atan(best / pc.texel_size));
+        if (b > a) E += w * slice(h, N.z, a, b);
+    }
+    return E;
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= int(pc.width) || p.y >= int(pc.height)) return;
+    vec3 N = normal_at(p);
+    vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
+    vec3 E = vec3(0.0);
+    for (uint i = 0u; i < pc.light_count; ++i) {
+        vec4 c_hi = hfgi_lights[3u * i], c_lo = hfgi_lights[3u * i + 1u], L = hfgi_lights[3u * i + 2u];
+        if (all(equal(L.rgb, vec3(0.0)))) continue;
+        // (c_hi − P) + c_lo: the f64 centre relative to the texel, exact near the surface.
+        precise vec3 C = (c_hi.xyz - P) + c_lo.xyz;
+        E += L.rgb * light_irradiance(vec2(p), N, C, c_hi.w);
+    }
+    vec3 rho = pc.albedo_map != 0u ? hfgi_albedo[uint(p.y) * pc.width + uint(p.x)].rgb : pc.albedo.rgb;
+    vec3 add = rho * E * 0.31830988618379067;
+    uint plane = pc.width * pc.height, idx = uint(p.y) * pc.width + uint(p.x);
+    uint at_direct = HFGI_PLANE_DIRECT * plane + idx, at_total = HFGI_PLANE_TOTAL * plane + idx;
+    hfgi_out[at_direct] = vec4(hfgi_out[at_direct].rgb + add, 1.0);
+    hfgi_out[at_total] = vec4(hfgi_out[at_total].rgb + add, 1.0);
+}
