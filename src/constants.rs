@@ -21,6 +21,10 @@ pub const PLANE_GLOSSY_INDIRECT: u32 = 5;
 /// Planes in the shading buffer.
 pub const PLANES: u32 = 6;
 
+/// Entries per order of the optimal-linear SH exponentiation's `a`, `b` tables
+/// (`math::shexp::OL_POINTS`, checked equal there).
+pub const OL_POINTS: u32 = 49;
+
 /// `(name, value, unsigned)` of each constant the shaders see, as `#define HFGI_<name>
 /// <value>` (with a `u` suffix when `unsigned`: the plane indices multiply `uint`s).
 pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
@@ -34,4 +38,5 @@ pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
     ("PLANE_GLOSSY_DIRECT", PLANE_GLOSSY_DIRECT, true),
     ("PLANE_GLOSSY_INDIRECT", PLANE_GLOSSY_INDIRECT, true),
     ("PLANES", PLANES, true),
+    ("OL_POINTS", OL_POINTS, false),
 ];

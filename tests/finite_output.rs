@@ -93,7 +93,41 @@ fn cases(scale_max: f64) -> Vec<(&'static str, Vec<String>, Vec<String>)> {
         ("gi.radial_probes", s(&["0", "16"]), s(&["17"])),
         ("gi.radial_probes_later", s(&["0", "16"]), s(&["17"])),
         ("gi.sweep_near", s(&["0", "64"]), s(&["65"])),
+        ("gi.local_light_azimuths", s(&["2", "64"]), s(&["1", "65"])),
+        ("gi.blocker_epsilon", s(&["1e-6", "0.999"]), s(&["9e-7", "1"])),
+        (
+            "local_light.0.position",
+            s(&["[-1e10,-1e10,1e10]", "[1e10,1e10,-1e10]", "[5,4,0.01]", "[5,4,-3]"]),
+            s(&["[1.1e10,0,0]"]),
+        ),
+        ("local_light.0.radius", s(&["1e-3", "1e6"]), s(&["9e-4", "1.1e6"])),
+        (
+            "local_light.0.radiance",
+            vec![format!("[{m},{m},{m}]"), "[0,0,0]".into()],
+            vec![format!("[{},0,0]", m * 1.1)],
+        ),
+        ("sphere.0.center", s(&["[-1e10,-1e10,1e10]", "[1e10,1e10,-1e10]", "[5,4,0]"]), s(&["[1.1e10,0,0]"])),
+        ("sphere.0.radius", s(&["1e-3", "1e6"]), s(&["9e-4", "1.1e6"])),
+        ("sphere.0.albedo", s(&["[0,0,0]", "[1,1,1]"]), s(&["[1.1,0,0]", "[-0.1,0,0]"])),
     ]
+}
+
+/// The keys a case needs besides its own: a local light's position, a sphere's centre and
+/// radius (the knobs of both need one).
+fn prerequisites(key: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    if (key.starts_with("local_light.") || key == "gi.local_light_azimuths") && key != "local_light.0.position" {
+        out.push("local_light.0.position=[5,4,3]".to_string());
+    }
+    if key.starts_with("sphere.") || key.starts_with("gi.blocker") {
+        if key != "sphere.0.center" {
+            out.push("sphere.0.center=[7,3,2]".to_string());
+        }
+        if key != "sphere.0.radius" {
+            out.push("sphere.0.radius=1.5".to_string());
+        }
+    }
+    out
 }
 
 /// Animation cases: `(kind, key, accepted extremes, beyond)`.
@@ -116,6 +150,7 @@ fn animation_cases() -> Vec<(&'static str, &'static str, Vec<&'static str>, Vec<
         ("day", "max_elevation_deg", vec!["3", "90"], vec!["2.9", "90.1"]),
         ("day", "sweep_deg", vec!["0", "360"], vec!["-1", "361"]),
         ("day", "orbit_turns", vec!["-10", "10"], vec!["-10.1", "10.1"]),
+        ("boulders", "lap_frames", vec!["2", "100000"], vec!["1", "100001"]),
     ]
 }
 
@@ -156,6 +191,11 @@ fn render_finite(ctx: &Context, scene: &Scene, what: &str) {
             r.set_key_lights(&f.key_lights).unwrap_or_else(|e| panic!("{what}: {e}"));
             r.set_environment(&f.environment).unwrap_or_else(|e| panic!("{what}: {e}"));
             r.set_camera(&f.camera).unwrap_or_else(|e| panic!("{what}: {e}"));
+            None
+        }
+        Animation::Boulders(p) => {
+            let b = hfgi::scene::boulders::Boulders::new(p.clone(), scene).unwrap_or_else(|e| panic!("{what}: {e}"));
+            r.set_spheres(&b.frame(3)).unwrap_or_else(|e| panic!("{what}: {e}"));
             None
         }
         Animation::None => None,
@@ -211,7 +251,9 @@ fn every_numeric_key_at_its_extremes_gives_finite_output() {
     for (key, values, beyond) in cases(scale_max) {
         for v in &values {
             let set = format!("{key}={v}");
-            let scene = scene_with(std::slice::from_ref(&set)).unwrap_or_else(|e| panic!("{set} rejected: {e}"));
+            let mut all = prerequisites(key);
+            all.push(set.clone());
+            let scene = scene_with(&all).unwrap_or_else(|e| panic!("{set} rejected: {e}"));
             render_finite(&gpu, &scene, &set);
             rendered += 1;
             if SWEEP_TOO.contains(&key) {
@@ -222,7 +264,9 @@ fn every_numeric_key_at_its_extremes_gives_finite_output() {
             }
         }
         for b in &beyond {
-            assert_rejected(key, &[format!("{key}={b}")]);
+            let mut all = prerequisites(key);
+            all.push(format!("{key}={b}"));
+            assert_rejected(key, &all);
         }
     }
     for (kind, key, values, beyond) in animation_cases() {
@@ -233,6 +277,7 @@ fn every_numeric_key_at_its_extremes_gives_finite_output() {
                 ("water", "speed") => "animation.damping=0.01",
                 ("water", _) => "animation.speed=0.3",
                 ("day", _) => "animation.sweep_deg=120",
+                ("boulders", _) => "sphere.0={ center = [7, 3, 2], radius = 1.5 }",
                 _ => "animation.count=2",
             };
             let set = [k.clone(), speed.to_string(), format!("animation.{key}={v}")];
@@ -241,7 +286,8 @@ fn every_numeric_key_at_its_extremes_gives_finite_output() {
             rendered += 1;
         }
         for b in beyond {
-            assert_rejected(key, &[k.clone(), format!("animation.{key}={b}")]);
+            let sphere = "sphere.0={ center = [7, 3, 2], radius = 1.5 }".to_string();
+            assert_rejected(key, &[k.clone(), sphere, format!("animation.{key}={b}")]);
         }
     }
     eprintln!("{rendered} frames at extreme values, all finite");

@@ -62,6 +62,16 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
             "[[local_light]]\nposition = [10.0, 12.0, 5.0]\n[[local_light]]\nposition = [30.0, 20.0, 8.0]\n",
             with(&["gi.bounces=1", "gi.local_light_azimuths=5"]),
         ),
+        (
+            "spheres, log_field, 1 bounce",
+            "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n[[sphere]]\ncenter = [30.0, 20.0, 8.0]\nradius = 2.0\n",
+            with(&["gi.bounces=1", "gi.blocker_shading=\"log_field\"", "environment.preset=\"sky\""]),
+        ),
+        (
+            "spheres, primal",
+            "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",
+            with(&["gi.blocker_shading=\"primal\"", "gi.sh_order=6"]),
+        ),
     ]
 }
 

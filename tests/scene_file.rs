@@ -95,19 +95,22 @@ fn every_example_scene_loads() {
         }
         let scene = load_scene(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert!(scene.field.width() * scene.field.height() <= 256 * 256, "{}: field too large", path.display());
-        assert!(!scene.key_lights.is_empty() || !scene.environment.sh.is_empty(), "{}: unlit", path.display());
+        let lit = !scene.key_lights.is_empty() || !scene.environment.sh.is_empty() || !scene.local_lights.is_empty();
+        assert!(lit, "{}: unlit", path.display());
         names.push(path.file_name().unwrap().to_string_lossy().to_string());
     }
     names.sort();
     assert_eq!(
         names,
         [
+            "boulders.toml",
             "bumps.toml",
             "city.toml",
             "cliff.toml",
             "craters.toml",
             "day.toml",
             "default.toml",
+            "lanterns.toml",
             "terrain-bspline.toml",
             "water.toml"
         ]

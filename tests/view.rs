@@ -14,7 +14,7 @@ use gpu_allocator::MemoryLocation;
 use hfgi::error::Error;
 use hfgi::frame::view::{ViewInputs, ViewOptions, ViewPass, BACKGROUND, MAX_SAMPLES, STAGE_RASTER};
 use hfgi::frame::Renderer;
-use hfgi::scene::model::Camera;
+use hfgi::scene::model::{Camera, Environment, KeyLight, SphereBlocker};
 use hfgi::vk::{memory, Buffer, Context, Recorder};
 
 /// Heights and shading uploaded into storage buffers, as the renderer would hold them.
@@ -552,4 +552,170 @@ fn looking_away_from_the_field_gives_the_background() {
     assert_eq!(pass.read_hdr(&ctx).unwrap().len(), 32 * 24);
     pass.destroy(&ctx);
     inp.destroy(&ctx);
+}
+
+/// Irradiance at the normal +z, computed here from the formula of docs/view.md §6: the first 9
+/// SH coefficients with the clamped-cosine factors (only `y_0^0`, `y_1^0` and `y_2^0` are
+/// non-zero at +z) plus `L·2π(1 − cos α)·max(d_z, 0)` per key light.
+fn irradiance_up(env: &Environment, keys: &[KeyLight]) -> [f64; 3] {
+    use std::f64::consts::PI;
+    let c = |k: usize| env.sh.get(k).copied().unwrap_or([0.0; 3]);
+    let (y00, y10, y20) = (0.5 / PI.sqrt(), (3.0 / (4.0 * PI)).sqrt(), 2.0 * 0.25 * (5.0 / PI).sqrt());
+    let mut e: [f64; 3] =
+        std::array::from_fn(|i| PI * y00 * c(0)[i] + 2.0 * PI / 3.0 * y10 * c(2)[i] + PI / 4.0 * y20 * c(6)[i]);
+    for l in keys {
+        let f = 2.0 * PI * (1.0 - l.angular_radius.cos()) * l.direction.z.max(0.0);
+        (0..3).for_each(|i| e[i] += l.radiance[i] * f);
+    }
+    e
+}
+
+fn sphere_colour_up(s: &SphereBlocker, env: &Environment, keys: &[KeyLight]) -> [f64; 3] {
+    let e = irradiance_up(env, keys);
+    std::array::from_fn(|i| s.albedo[i] / std::f64::consts::PI * e[i])
+}
+
+fn assert_close(got: [f32; 4], want: [f64; 3], what: &str) {
+    let worst = (0..3).map(|i| (f64::from(got[i]) - want[i]).abs() / want[i].abs()).fold(0.0, f64::max);
+    eprintln!("{what}: GPU {:?}, expected {want:?}, max relative error {worst:.2e}", &got[..3]);
+    assert!(worst <= 1e-3 && got[3] == 1.0, "{what}: GPU {got:?}, expected {want:?}");
+}
+
+#[test]
+fn spheres_are_drawn_lit_and_depth_tested_with_the_field() {
+    let ctx = gpu();
+    // A flat field at z = 0 with a shading gradient; the camera looks straight down at its
+    // centre; an odd image size puts a pixel centre exactly on the image centre.
+    let n = 33;
+    let inp = Inputs::new(&ctx, n, n, |i, j| (0.0, [0.2 + 0.01 * i as f32, 0.3 + 0.005 * j as f32, 0.4]));
+    let (size, fov) = (65u32, 40.0);
+    let cam = camera([16.0, 16.0, 40.0], [16.0, 16.0, 0.0], fov, size, size);
+    let before = ctx.pipelines_created();
+    let mut pass = inp.pass(&ctx, &cam, Some(1)).unwrap();
+    let plain = render(&ctx, &pass);
+    let env = common::scenes::sky(4);
+    let keys = vec![common::scenes::key_light(60.0, 30.0, 5.0, 4.0), common::scenes::key_light(-20.0, 0.0, 3.0, 9.0)];
+    pass.set_sphere_lighting(&ctx, &env, &keys).unwrap();
+    assert_eq!(ctx.pipelines_created(), before + 1, "lighting alone creates nothing");
+    let sphere = SphereBlocker { center: DVec3::new(16.0, 16.0, 5.0), radius: 3.0, albedo: [0.8, 0.5, 0.3] };
+    let dark = SphereBlocker { center: DVec3::new(0.0, 0.0, -1e10), radius: 1.0, albedo: [0.0; 3] };
+    pass.set_spheres(&ctx, &[sphere.clone(), dark.clone()]).unwrap();
+    assert_eq!(ctx.pipelines_created(), before + 2, "the sphere pipeline");
+    assert_eq!(pass.sphere_count(), 1, "the dark slot is skipped");
+    let img = render(&ctx, &pass);
+    let w = size as usize;
+    let centre = img[(w / 2) * w + w / 2];
+    // The image centre sees the sphere's top, normal +z.
+    assert_close(centre, sphere_colour_up(&sphere, &env, &keys), "sphere top");
+    // Away from the sphere's disc (projected radius + 2 px) the field is as without it.
+    let dist = 40.0 - 5.0;
+    let disc = (sphere.radius / dist).asin().tan() / (fov / 2.0f64).to_radians().tan() * f64::from(size) / 2.0 + 2.0;
+    let mut same = 0;
+    for (k, (a, b)) in img.iter().zip(&plain).enumerate() {
+        let (x, y) = ((k % w) as f64 + 0.5 - f64::from(size) / 2.0, (k / w) as f64 + 0.5 - f64::from(size) / 2.0);
+        if (x * x + y * y).sqrt() > disc {
+            assert_eq!(a, b, "pixel ({}, {}) outside the sphere changed", k % w, k / w);
+            same += 1;
+        } else if (x * x + y * y).sqrt() < disc - 4.0 {
+            assert_ne!(a, b, "pixel ({}, {}) inside the sphere's disc shows the field", k % w, k / w);
+        }
+    }
+    eprintln!("{same} pixels outside the sphere's disc (radius {disc:.1} px) equal the field without spheres");
+    assert!(same > w * w / 2);
+    // A corner pixel far from the sphere: the field's shading as before.
+    assert_eq!(img[2 * w + 2], plain[2 * w + 2]);
+    assert_eq!(img[2 * w + 2][3], 1.0);
+    // Below the field the sphere is hidden by it (depth test): the image is the field's.
+    let below = SphereBlocker { center: DVec3::new(16.0, 16.0, -6.0), ..sphere.clone() };
+    pass.set_spheres(&ctx, &[below]).unwrap();
+    assert_eq!(render(&ctx, &pass), plain, "a sphere under the field is hidden");
+    // Half sunk into the field: its top is still drawn, the field hides the rest.
+    let sunk = SphereBlocker { center: DVec3::new(16.0, 16.0, 0.0), ..sphere.clone() };
+    pass.set_spheres(&ctx, std::slice::from_ref(&sunk)).unwrap();
+    assert_close(render(&ctx, &pass)[(w / 2) * w + w / 2], sphere_colour_up(&sunk, &env, &keys), "sunk sphere top");
+    // A big sphere far below the field (behind it, hidden) widens the far plane a million
+    // times, which would push the near plane (1e-5 · far) past the field: the field is not
+    // clipped and looks the same.
+    let far = SphereBlocker { center: DVec3::new(16.0, 16.0, -3e7), radius: 1e4, ..sphere.clone() };
+    pass.set_spheres(&ctx, &[far]).unwrap();
+    assert!(pass.camera_model().far > 1e7);
+    assert_eq!(render(&ctx, &pass), plain, "a sphere far away does not clip the field");
+    // No live spheres: the image is the original bit for bit.
+    pass.set_spheres(&ctx, &[dark]).unwrap();
+    assert_eq!(pass.sphere_count(), 0);
+    assert_eq!(render(&ctx, &pass), plain, "no live spheres: the field alone");
+    assert_eq!(ctx.pipelines_created(), before + 2, "sphere moves create no pipelines");
+    // More key lights, then more spheres than the objects hold room for: they are recreated
+    // (one pipeline each time) and keep what was set.
+    pass.set_spheres(&ctx, std::slice::from_ref(&sphere)).unwrap();
+    let mut keys3 = keys.clone();
+    keys3.push(common::scenes::key_light(80.0, 100.0, 10.0, 2.0));
+    pass.set_sphere_lighting(&ctx, &env, &keys3).unwrap();
+    assert_eq!((ctx.pipelines_created(), pass.sphere_count()), (before + 3, 1));
+    assert_close(render(&ctx, &pass)[(w / 2) * w + w / 2], sphere_colour_up(&sphere, &env, &keys3), "3 key lights");
+    let small = SphereBlocker { center: DVec3::new(4.0, 4.0, 2.0), radius: 1.0, albedo: [0.5; 3] };
+    let other = SphereBlocker { center: DVec3::new(28.0, 28.0, 2.0), ..small.clone() };
+    pass.set_spheres(&ctx, &[small, sphere.clone(), other]).unwrap();
+    assert_eq!((ctx.pipelines_created(), pass.sphere_count()), (before + 4, 3));
+    assert_close(render(&ctx, &pass)[(w / 2) * w + w / 2], sphere_colour_up(&sphere, &env, &keys3), "3 spheres");
+    pass.destroy(&ctx);
+    // With the automatic (MSAA) sample count: the fragment shader runs once per pixel (no
+    // sample shading), so the covered centre pixel has the same colour.
+    let mut msaa = inp.pass(&ctx, &cam, None).unwrap();
+    msaa.set_sphere_lighting(&ctx, &env, &keys).unwrap();
+    msaa.set_spheres(&ctx, std::slice::from_ref(&sphere)).unwrap();
+    let got = render(&ctx, &msaa)[(w / 2) * w + w / 2];
+    let want = sphere_colour_up(&sphere, &env, &keys);
+    let worst = (0..3).map(|i| (f64::from(got[i]) - want[i]).abs() / want[i]).fold(0.0, f64::max);
+    eprintln!("{} samples: sphere top {:?}, relative error {worst:.2e}", msaa.samples(), &got[..3]);
+    assert!(worst <= 1e-3 && got[3] == 1.0, "{got:?} vs {want:?}");
+    msaa.destroy(&ctx);
+    inp.destroy(&ctx);
+}
+
+#[test]
+fn for_renderer_draws_the_renderers_spheres() {
+    let ctx = gpu();
+    let field = common::rough_field(24, 24, 5);
+    let mut scene = common::scenes::scene(field);
+    scene.gi.azimuths = 8;
+    scene.camera = camera([11.5, 11.5, 40.0], [11.5, 11.5, 0.0], 40.0, 33, 33);
+    // Without spheres: one pipeline, no sphere objects.
+    let renderer = Renderer::new(&ctx, &scene).unwrap();
+    let before = ctx.pipelines_created();
+    let view = ViewPass::for_renderer(&ctx, &scene, &renderer, &ViewOptions { samples: Some(1) }).unwrap();
+    assert_eq!(ctx.pipelines_created(), before + 1);
+    assert_eq!(view.sphere_count(), 0);
+    let bytes = view.memory_bytes();
+    view.destroy(&ctx);
+    renderer.destroy(&ctx);
+    // With one sphere above the centre.
+    let sphere = SphereBlocker { center: DVec3::new(11.5, 11.5, 20.0), radius: 2.0, albedo: [0.3, 0.6, 0.9] };
+    scene.spheres = vec![sphere.clone()];
+    let mut renderer = Renderer::new(&ctx, &scene).unwrap();
+    let before = ctx.pipelines_created();
+    let view = ViewPass::for_renderer(&ctx, &scene, &renderer, &ViewOptions { samples: Some(1) }).unwrap();
+    assert_eq!(ctx.pipelines_created(), before + 2);
+    assert_eq!(view.sphere_count(), 1);
+    assert!(view.memory_bytes() > bytes);
+    ctx.submit_and_wait(|cmd| {
+        let mut rec = Recorder::new(&ctx, cmd, None);
+        renderer.record(&mut rec);
+        view.record(&mut rec);
+        Ok(())
+    })
+    .unwrap();
+    let img = view.read_rgba(&ctx).unwrap();
+    assert_close(
+        img[16 * 33 + 16],
+        sphere_colour_up(&sphere, &scene.environment, &scene.key_lights),
+        "renderer's sphere",
+    );
+    // The field around the sphere's disc (about 4.5 px) is drawn (alpha 1) with the renderer's
+    // shading.
+    let field_pixel = img[6 * 33 + 16];
+    assert!(field_pixel[3] == 1.0 && field_pixel[..3].iter().all(|c| c.is_finite() && *c > 0.0), "{field_pixel:?}");
+    assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite())));
+    view.destroy(&ctx);
+    renderer.destroy(&ctx);
 }

@@ -12,6 +12,7 @@ use hfgi::frame::water::WaterSim;
 use hfgi::frame::Renderer;
 use hfgi::io::gif::GifStream;
 use hfgi::scene::animated::{Animation, MovingBumps};
+use hfgi::scene::boulders::Boulders;
 use hfgi::scene::day::DayCycle;
 use hfgi::scene::model::Scene;
 use hfgi::vk::{Context, Recorder, StageTimer};
@@ -83,6 +84,8 @@ enum Driver {
     Bumps(MovingBumps),
     /// The sun, sky and camera move through the renderer's live inputs; the heights stay.
     Day(DayCycle),
+    /// The spheres roll through the renderer's live inputs; the heights stay.
+    Boulders(Boulders),
 }
 
 /// The GPU objects of an animation, destroyed together ([`Passes::destroy`]).
@@ -135,7 +138,12 @@ impl Passes {
                     .context("creating the bumps")?,
             ),
             Animation::Day(p) => Driver::Day(DayCycle::new(p.clone(), scene).context("creating the day")?),
-            Animation::None => bail!("animation.kind = \"none\": expected \"water\", \"bumps\" or \"day\""),
+            Animation::Boulders(p) => {
+                Driver::Boulders(Boulders::new(p.clone(), scene).context("creating the boulders")?)
+            }
+            Animation::None => {
+                bail!("animation.kind = \"none\": expected \"water\", \"bumps\", \"day\" or \"boulders\"")
+            }
         };
         let steps = self.steps_of(&driver);
         self.driver = Some(driver);
@@ -158,7 +166,7 @@ impl Passes {
     fn steps_of(&self, driver: &Driver) -> u32 {
         match driver {
             Driver::Water(sim) => sim.params().steps_per_frame,
-            Driver::Bumps(_) | Driver::Day(_) => 0,
+            Driver::Bumps(_) | Driver::Day(_) | Driver::Boulders(_) => 0,
         }
     }
 }
@@ -233,6 +241,11 @@ fn record_frame(ctx: &Context, p: &mut Passes, f: u32) -> Result<f64> {
             p.renderer.set_environment(&frame.environment)?;
             p.renderer.set_camera(&frame.camera)?;
             view.set_camera(&frame.camera)?;
+        }
+        Driver::Boulders(b) => {
+            let spheres = b.frame(u64::from(f));
+            p.renderer.set_spheres(&spheres)?;
+            view.set_spheres(ctx, &spheres)?;
         }
         Driver::Water(_) => {}
     }

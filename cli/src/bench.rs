@@ -11,7 +11,10 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use hfgi::frame::Renderer;
 use hfgi::reference::truth::{TruthOutput, TruthSettings};
-use hfgi::scene::model::{GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene, VisibilityMethod};
+use hfgi::scene::model::{
+    BlockerExp, BlockerShading, GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene,
+    VisibilityMethod,
+};
 use hfgi::vk::{Context, Recorder, StageTimer};
 
 use super::{context, load_scene_or_default, plot, DeviceArgs};
@@ -98,6 +101,13 @@ pub enum Sweep {
     Presets,
 }
 
+/// What a scene holds beyond the height field that has knobs of its own.
+#[derive(Clone, Copy)]
+struct Content {
+    local_lights: bool,
+    spheres: bool,
+}
+
 /// One configuration's measurements.
 struct Row {
     scene: String,
@@ -113,8 +123,9 @@ struct Row {
 
 /// The configurations: the baseline, then one knob at a time, the four presets, then (full
 /// sweep) the m × k grid; swept horizons (`gi.visibility = "sweep"`) unless the field wraps;
-/// the local lights' azimuths when the scene has local lights.
-fn configs(base: &GiSettings, quick: bool, base_wraps: bool, local_lights: bool) -> Vec<(String, GiSettings)> {
+/// the local lights' azimuths when the scene has local lights; the sphere blockers' settings
+/// when it has spheres.
+fn configs(base: &GiSettings, quick: bool, base_wraps: bool, content: Content) -> Vec<(String, GiSettings)> {
     let mut out = vec![("baseline".to_string(), base.clone())];
     let mut push = |knob: &str, f: &dyn Fn(&mut GiSettings)| {
         let mut g = base.clone();
@@ -167,7 +178,19 @@ fn configs(base: &GiSettings, quick: bool, base_wraps: bool, local_lights: bool)
             });
         }
     }
-    if local_lights {
+    if content.spheres {
+        for e in [0.05, 0.1, 0.2, 0.5] {
+            push("blocker_epsilon", &|g| g.blocker_epsilon = e);
+        }
+        push("blocker_ratio", &|g| g.blocker_ratio = !base.blocker_ratio);
+        for x in [BlockerExp::Quadrature, BlockerExp::Linear] {
+            push("blocker_exp", &|g| g.blocker_exp = x);
+        }
+        for m in [BlockerShading::Log, BlockerShading::LogField, BlockerShading::LogBrdf, BlockerShading::Primal] {
+            push("blocker_shading", &|g| g.blocker_shading = m);
+        }
+    }
+    if content.local_lights {
         let ks: &[u32] = if quick { &[4] } else { &[2, 4, 8, 16, 32] };
         for &k in ks {
             push("local_light_azimuths", &|g| g.local_light_azimuths = k);
@@ -402,14 +425,22 @@ fn settings_label(g: &GiSettings) -> String {
         VisibilityMethod::Sweep => format!(" sweep near={}", g.sweep_near),
         VisibilityMethod::Ladder => String::new(),
     };
-    let default_local = GiSettings::default().local_light_azimuths;
+    let d = GiSettings::default();
+    let blockers = if (g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading)
+        != (d.blocker_epsilon, d.blocker_ratio, d.blocker_exp, d.blocker_shading)
+    {
+        format!(" ε={} ratio={} exp={} {}", g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading)
+    } else {
+        String::new()
+    };
+    let default_local = d.local_light_azimuths;
     let local = if g.local_light_azimuths != default_local {
         format!(" local_az={}", g.local_light_azimuths)
     } else {
         String::new()
     };
     format!(
-        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}",
+        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}{blockers}",
         g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
 }
@@ -470,7 +501,11 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
         let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
         let cfgs = match a.sweep {
-            Sweep::Knobs => configs(&scene.gi, a.quick, scene.wrap, !scene.local_lights.is_empty()),
+            Sweep::Knobs => {
+                let content =
+                    Content { local_lights: !scene.local_lights.is_empty(), spheres: !scene.spheres.is_empty() };
+                configs(&scene.gi, a.quick, scene.wrap, content)
+            }
             Sweep::Ablation => ablation(&scene.gi, false),
             Sweep::Presets => ablation(&scene.gi, true),
         };

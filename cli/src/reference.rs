@@ -79,6 +79,12 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
     settings.check_work(&scene).context("reference settings")?;
     let (w, h) = (scene.field.width(), scene.field.height());
     let kind = if a.sh_visibility { "SH-visibility" } else { "exact" };
+    // Sphere blockers (docs/accuracy.md §1): opaque, they do not reflect; both versions.
+    let spheres = match scene.spheres.len() {
+        0 => String::new(),
+        1 => ", 1 sphere blocker".to_string(),
+        k => format!(", {k} sphere blockers"),
+    };
     let bar = progress_bar(&format!("{kind} reference"));
     let mut on_progress = |done: u64, total: u64| {
         bar.set_length(total);
@@ -89,13 +95,13 @@ pub fn reference(a: ReferenceArgs) -> Result<()> {
         if w * h > 64 * 64 {
             anyhow::bail!("--cpu: the f64 CPU reference is for fields up to 64² texels; this field is {w}×{h}");
         }
-        eprintln!("{kind} reference on the CPU (f64), field {w}×{h}, {} bounces", scene.gi.bounces);
+        eprintln!("{kind} reference on the CPU (f64), field {w}×{h}, {} bounces{spheres}", scene.gi.bounces);
         render_truth(&scene, &settings, &mut on_progress)?
     } else {
         let ctx = context(&a.device)?;
         let rays = if a.march { format!("march at {} texel", a.step) } else { "exact intersection".to_string() };
         eprintln!(
-            "{kind} reference on {} ({}), field {w}×{h}, {} bounces, {} azimuths, {rays}, {} nodes",
+            "{kind} reference on {} ({}), field {w}×{h}, {} bounces, {} azimuths, {rays}, {} nodes{spheres}",
             ctx.info().name,
             ctx.info().driver,
             scene.gi.bounces,

@@ -98,6 +98,27 @@ struct hfgi_LocalPush {
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
 };
 
+// Push constants of the sphere blockers' visibility (glsl/visibility/blockers.comp.glsl,
+// docs/blockers.md). 64 bytes.
+struct hfgi_BlockerPush {
+    uint width;         // full resolution (the heights)
+    uint height;
+    uint work_width;    // receiver grid
+    uint work_height;
+    uint sphere_count;  // sphere slots (hfgi.blockers.spheres holds 2 vec4 per slot)
+    uint quad_count;    // nodes of the exponentiation's quadrature (hfgi.blockers.quad)
+    float texel_size;
+    float log_eps;      // ln ε (gi.blocker_epsilon)
+    uint ratio;         // 1: ratio attenuation r/d (gi.blocker_ratio)
+    uint env_offset;    // log mode: first float of the environment set's V in the visibility buffer
+    float ol_step;      // spacing of the OL tables in ‖f̂‖
+    uint triple_count;  // primal mode: entries of the SH triple-product table
+    uint pad1;
+    uint pad2;
+    uint pad3;
+    uint pad4;
+};
+
 // Push constants of the indirect scan (indirect.scan). 80 bytes.
 struct hfgi_IndirectPush {
     uint work_width;      // receiver grid
@@ -171,9 +192,10 @@ struct hfgi_TruthPush {
     uint azimuth_count; //   [first, first + count) of the cap buffer (cap = 1) in this dispatch
     uint march;         // 1: march at `step`, 0: exact intersection with the bilinear patches
     uint cap;           // 1: this dispatch integrates the key light cap_* (exact, direct);
-                        // 2: the local light local_* (both variants, direct)
+                        // 2: the local light local_* (both variants, direct);
+                        // 3: the sphere blockers, flattened samples (both variants, direct)
     uint accumulate;    // 1: add to the output, 0: overwrite it (a pass's first dispatch)
-    uint local_nodes;   // local light: azimuth samples of a cap holding no pole (cap buffer [0, local_nodes))
+    uint local_nodes;   // local light, sphere: azimuth samples of a cap holding no pole (cap buffer [0, local_nodes))
     vec4 cap_dir;       // key light: unit direction (xyz), cos α (w)
     vec4 cap_radiance;  // key light: rgb radiance, sin α (w); local light: rgb radiance
     vec4 local_centre;  // local light: centre, high f32 part (xyz); radius (w)

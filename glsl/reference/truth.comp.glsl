@@ -16,6 +16,14 @@
 // twin): one light per dispatch, its cap formed per texel, E = L ∫ max(N·ω, 0) dω over the
 // directions whose ray reaches the sphere before the height field, accumulated (rgb) in a
 // region after the W·H·n² texels' (element W·H·n² + texel).
+// Sphere blockers (HFGI_SPHERES of them, binding 7; opaque, they do not reflect): a receiver
+// inside one gets nothing (every mode adds 0). Direct light: the environment dispatches
+// integrate the open interval as if there were no spheres; the sphere dispatches (cap = 3,
+// both modes) take out, per sphere k over its own per-receiver azimuth samples (as a local
+// light's), the environment (exact: L (N·ω)⁺; SH mode: y_k) on (W_k ∩ open) minus the windows
+// of spheres j < k (next_gap), so overlaps count once; a key light's window loses every
+// sphere's window (cap = 1); a local light's node counts only if its ray enters no sphere
+// before the light. Bounces: a node whose ray enters a sphere before its first hit carries 0.
 // The host finishes the shading in f64 (ρ/π, L ⊛ V, clamped-cosine ZH; ρ/π · E of the local
 // lights added to the direct exit radiance).
 #include "hfgi_shared.glsl"
@@ -28,6 +36,8 @@ layout(constant_id = 1) const int HFGI_NODES = 16;
 layout(constant_id = 2) const uint HFGI_WRAP = 0u;
 layout(constant_id = 3) const uint HFGI_MARCH = 0u;
 layout(constant_id = 4) const uint HFGI_SHVIS = 0u;
+// Sphere blockers in binding 7 (0: none; the loops over them compile out).
+layout(constant_id = 5) const int HFGI_SPHERES = 0;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Heights { float hfgi_h[]; };       // W×H
@@ -36,7 +46,8 @@ layout(std430, binding = 2) readonly buffer Source { vec4 hfgi_source[]; };    /
 layout(std430, binding = 3) readonly buffer Gauss { vec2 hfgi_gauss[]; };      // nodes, weights on [-1, 1]
 layout(std430, binding = 4) readonly buffer Consts { float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER]; };
 layout(std430, binding = 5) buffer Out { vec4 hfgi_out[]; };                   // texel × n² (accumulated over azimuth chunks), then texel: local lights' E
-layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // local lights' (sin u, π/2·w·cos u) [0, local_nodes), then key-light samples (φ, weight)
+layout(std430, binding = 6) readonly buffer Caps { vec2 hfgi_caps[]; };        // local lights' and spheres' (sin u, π/2·w·cos u) [0, local_nodes), then key-light samples (φ, weight)
+layout(std430, binding = 7) readonly buffer Spheres { vec4 hfgi_spheres[]; };  // per sphere: centre high f32 + radius (w), centre low f32
 layout(push_constant) uniform Push { hfgi_TruthPush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
@@ -223,12 +234,103 @@ float horizon(ivec2 p, vec2 d, float h0) {
 
 vec3 hfgi_acc[HFGI_N2];
 
-// Blocked node e of [tangent, hor] (elevation om) hits at `hit`: add its radiance.
-void add_hit(int e, float mid, float half_w, vec2 d, vec3 N, float dphi, vec2 hit) {
+// ---- Sphere blockers (src/reference/cap.rs SphereCaps, gaps) ----
+
+// asin to f32 precision (Cephes asinf: an odd polynomial on [0, ½], and asin x = π/2 −
+// 2 asin √((1 − x)/2) above), for every cap's δ and β (key lights, local lights, spheres).
+// lavapipe's own asin is far less accurate: with it the spheres' GPU-vs-CPU error was 2.3e-5
+// (texels off by up to 7e-4 where a cap nearly holds the pole) and the local lights' 2.5e-6;
+// with this one, 2.6e-7 and 5.6e-7 (tests/truth.rs).
+float precise_asin(float x) {
+    float a = abs(x);
+    bool big = a > 0.5;
+    float z = big ? 0.5 * (1.0 - a) : a * a;
+    float y = big ? sqrt(z) : a;
+    float p = ((((4.2163199048e-2 * z + 2.4181311049e-2) * z + 4.5470025998e-2) * z + 7.4953002686e-2) * z + 1.6666752422e-1) * z * y + y;
+    return sign(x) * (big ? 1.5707963267948966 - 2.0 * p : p);
+}
+
+// Per sphere, seen from this receiver: (C = c − P, q = d² − r²), (l = C/d, sin α), cos α; and
+// its elevation window on the current azimuth (vec2(4.0): none — it covers nothing and ends no
+// gap, every elevation being ≤ π/2).
+vec4 hfgi_sC[HFGI_SPHERES + 1];
+vec4 hfgi_sl[HFGI_SPHERES + 1];
+float hfgi_scos[HFGI_SPHERES + 1];
+vec2 hfgi_win[HFGI_SPHERES + 1];
+
+// The spheres from receiver P; true when P lies inside one (fully blocked).
+bool spheres_setup(ivec2 p, float h0) {
+    bool inside = false;
+    for (int k = 0; k < HFGI_SPHERES; ++k) {
+        // (c_hi − P) + c_lo: the f64 centre relative to the receiver.
+        precise vec3 C = (hfgi_spheres[2 * k].xyz - vec3(vec2(p) * pc.texel_size, h0)) + hfgi_spheres[2 * k + 1].xyz;
+        float r = hfgi_spheres[2 * k].w;
+        float d = length(C);
+        inside = inside || d <= r;
+        float q = (d - r) * (d + r);
+        hfgi_sC[k] = vec4(C, q);
+        hfgi_sl[k] = vec4(C / max(d, 1e-30), r / max(d, 1e-30));
+        hfgi_scos[k] = sqrt(max(q, 0.0)) / max(d, 1e-30);
+    }
+    return inside;
+}
+
+// Every sphere's elevation window on the half-plane of d (src/reference/cap.rs cap_window).
+void sphere_windows(vec2 d) {
+    for (int k = 0; k < HFGI_SPHERES; ++k) {
+        vec3 l = hfgi_sl[k].xyz;
+        float sin_a = hfgi_sl[k].w, cos_a = hfgi_scos[k];
+        float dl = dot(d, l.xy), cr = d.x * l.y - d.y * l.x;
+        float x = sin_a * sin_a - cr * cr;
+        if (x < 0.0) {
+            hfgi_win[k] = vec2(4.0);
+            continue;
+        }
+        float R = length(vec2(dl, l.z));
+        float delta = 2.0 * precise_asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
+        float wc = atan(l.z, dl);
+        hfgi_win[k] = vec2(wc - delta, wc + delta);
+    }
+}
+
+// The next piece [x, end] of [x, b] outside the windows [0, count) (src/reference/cap.rs gaps):
+// the cursor jumps over the windows holding it (each moves it at most once), then the gap runs
+// to the nearest window start beyond it, or b. False when nothing is left.
+bool next_gap(inout float x, float b, int count, out float end) {
+    end = b;
+    for (int pass = 0; pass <= count; ++pass) {
+        bool moved = false;
+        for (int j = 0; j < count; ++j) {
+            vec2 w = hfgi_win[j];
+            if (w.x <= x && x < w.y) { x = w.y; moved = true; }
+        }
+        if (!moved) break;
+    }
+    if (x >= b) return false;
+    for (int j = 0; j < count; ++j) if (hfgi_win[j].x > x) end = min(end, hfgi_win[j].x);
+    return true;
+}
+
+// Distance (world units) along unit u to the nearest sphere it enters (1e30: none):
+// τ = q/(u·C + √((u·C)² − q)) where u·C > 0 and (u·C)² ≥ q.
+float sphere_hit(vec3 u) {
+    float t = 1e30;
+    for (int k = 0; k < HFGI_SPHERES; ++k) {
+        float b = dot(u, hfgi_sC[k].xyz), q = hfgi_sC[k].w;
+        float disc = b * b - q;
+        if (b > 0.0 && disc >= 0.0) t = min(t, q / (b + sqrt(disc)));
+    }
+    return t;
+}
+
+// Blocked node e of [tangent, hor] (elevation om) hits at `hit`: add its radiance, unless its
+// ray enters a sphere first (planar distances in texels).
+void add_hit(int e, float mid, float half_w, vec2 d, vec3 N, float dphi, ivec2 p, vec2 hit) {
     float om = mid + half_w * hfgi_gauss[e].x;
+    vec3 dir = vec3(cos(om) * d, sin(om));
+    if (HFGI_SPHERES > 0 && sphere_hit(dir) * cos(om) / pc.texel_size < length(hit - vec2(p))) return;
     vec3 r = bilinear_source(hit);
     float wt = half_w * hfgi_gauss[e].y * cos(om) * dphi;
-    vec3 dir = vec3(cos(om) * d, sin(om));
     if (HFGI_SHVIS != 0u) {
         hfgi_sh_eval(dir);
         for (int c = 0; c < HFGI_N2; ++c) hfgi_acc[c] += wt * hfgi_y[c] * r;
@@ -259,7 +361,7 @@ void bounce_azimuth(ivec2 p, vec2 d, float h0, vec3 N, float dphi, float hor, fl
                 if (w_k > running) { running = w_k; hit = q; }
             }
             if (running < om) break;
-            add_hit(e, mid, half_w, d, N, dphi, hit);
+            add_hit(e, mid, half_w, d, N, dphi, p, hit);
         }
         return;
     }
@@ -275,7 +377,7 @@ void bounce_azimuth(ivec2 p, vec2 d, float h0, vec3 N, float dphi, float hor, fl
             float k = tan(mid + half_w * hfgi_gauss[e].x) * pc.texel_size;
             if (k > top) break;
             float t = q.t0 + first_reach(q, k, m.y);
-            add_hit(e, mid, half_w, d, N, dphi, vec2(p) + t * d);
+            add_hit(e, mid, half_w, d, N, dphi, p, vec2(p) + t * d);
         }
         running = top;
     }
@@ -302,7 +404,8 @@ void direct_azimuth(vec2 d, vec3 N, float dphi, float hor, float tangent) {
 }
 
 // The key light's cap on one azimuth sample (weight wphi): its elevation window
-// |ω − ω_c| ≤ δ (src/reference/cap.rs) intersected with the open interval [max(ω_hor, ω_t), π/2].
+// |ω − ω_c| ≤ δ (src/reference/cap.rs) intersected with the open interval [max(ω_hor, ω_t), π/2],
+// minus the spheres' windows (each gap its own Gauss–Legendre nodes).
 void cap_azimuth(vec2 d, vec3 N, float wphi, float hor, float tangent) {
     vec3 l = pc.cap_dir.xyz;
     float cos_a = pc.cap_dir.w, sin_a = pc.cap_radiance.w;
@@ -310,26 +413,91 @@ void cap_azimuth(vec2 d, vec3 N, float wphi, float hor, float tangent) {
     float x = sin_a * sin_a - cr * cr;
     if (x < 0.0) return;
     float R = length(vec2(dl, l.z));
-    float delta = 2.0 * asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
+    float delta = 2.0 * precise_asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
     float wc = atan(l.z, dl);
     float lo = max(max(wc - delta, hor), tangent), hi = min(wc + delta, 1.5707963267948966);
     if (hi <= lo) return;
-    float half_w = 0.5 * (hi - lo), mid = 0.5 * (hi + lo);
-    for (int e = 0; e < HFGI_NODES; ++e) {
-        float om = mid + half_w * hfgi_gauss[e].x;
-        vec3 dir = vec3(cos(om) * d, sin(om));
-        hfgi_acc[0] += (wphi * half_w * hfgi_gauss[e].y * cos(om) * max(dot(N, dir), 0.0)) * pc.cap_radiance.rgb;
+    sphere_windows(d);
+    float g0 = lo, g1;
+    for (int g = 0; g <= HFGI_SPHERES; ++g) {
+        if (!next_gap(g0, hi, HFGI_SPHERES, g1)) break;
+        float half_w = 0.5 * (g1 - g0), mid = 0.5 * (g1 + g0);
+        for (int e = 0; e < HFGI_NODES; ++e) {
+            float om = mid + half_w * hfgi_gauss[e].x;
+            vec3 dir = vec3(cos(om) * d, sin(om));
+            hfgi_acc[0] += (wphi * half_w * hfgi_gauss[e].y * cos(om) * max(dot(N, dir), 0.0)) * pc.cap_radiance.rgb;
+        }
+        g0 = g1;
+    }
+}
+
+// Sphere sample a of this dispatch (cap = 3): sphere k = a / M, its sample a % M, M =
+// max(A, local_nodes); the sphere's azimuth samples as a local light's (local_nodes
+// Gauss–Legendre ones in the sin u substitution, or the A uniform ones for a cap holding a
+// pole). Takes out of the direct integral the environment on (W_k ∩ open) minus the windows of
+// spheres j < k.
+void sphere_azimuth(ivec2 p, float h0, vec3 N, uint a) {
+    uint M = max(pc.azimuths, pc.local_nodes);
+    int k = int(a / M);
+    uint s = a % M;
+    vec3 l = hfgi_sl[k].xyz;
+    float sin_a = hfgi_sl[k].w;
+    float cos_e = length(l.xy);
+    bool pole = cos_e <= sin_a;
+    if (s >= (pole ? pc.azimuths : pc.local_nodes)) return;
+    float dphi = 6.283185307179586 / float(pc.azimuths);
+    vec2 g = hfgi_caps[min(s, pc.local_nodes - 1u)];
+    float beta = pole ? 0.0 : precise_asin(min(sin_a / cos_e, 1.0));
+    float phi = pole ? (float(s) + 0.5) * dphi : atan(l.y, l.x) + beta * g.x;
+    float wphi = pole ? dphi : beta * g.y;
+    vec2 d = vec2(cos(phi), sin(phi));
+    sphere_windows(d);
+    vec2 wk = hfgi_win[k];
+    if (wk.x == 4.0) return;
+    bool sh_mode = HFGI_SHVIS != 0u;
+    float hor = horizon(p, d, h0);
+    float tangent = atan(-(N.x * d.x + N.y * d.y), N.z);
+    float lo = max(wk.x, sh_mode ? hor : max(hor, tangent)), hi = min(wk.y, 1.5707963267948966);
+    if (hi <= lo) return;
+    float g0 = lo, g1;
+    for (int gi = 0; gi <= HFGI_SPHERES; ++gi) {
+        if (!next_gap(g0, hi, k, g1)) break;
+        float half_w = 0.5 * (g1 - g0), mid = 0.5 * (g1 + g0);
+        for (int e = 0; e < HFGI_NODES; ++e) {
+            float om = mid + half_w * hfgi_gauss[e].x;
+            float wt = wphi * half_w * hfgi_gauss[e].y * cos(om);
+            vec3 dir = vec3(cos(om) * d, sin(om));
+            hfgi_sh_eval(dir);
+            if (sh_mode) {
+                for (int c = 0; c < HFGI_N2; ++c) hfgi_acc[c].x -= wt * hfgi_y[c];
+            } else {
+                vec3 L = vec3(0.0);
+                for (int c = 0; c < HFGI_N2; ++c) L += hfgi_light[c].rgb * hfgi_y[c];
+                hfgi_acc[0] -= wt * max(dot(N, dir), 0.0) * L;
+            }
+        }
+        g0 = g1;
     }
 }
 
 // ---- Local lights (cap = 2; src/reference/local_truth.rs) ----
 
-// ∫_a^b (N·ω) cos ω dω on the half-plane of azimuth d, Gauss–Legendre, every node visible.
-float local_open(vec2 d, vec3 N, float a, float b) {
+// The ray along unit u enters a sphere blocker before the local light (C, q = d² − r²; a
+// receiver inside the light: never).
+bool local_hidden(vec3 u, vec3 C, float q, bool in_light) {
+    if (HFGI_SPHERES == 0 || in_light) return false;
+    float b = dot(u, C);
+    return sphere_hit(u) < q / (b + sqrt(max(b * b - q, 0.0)));
+}
+
+// ∫_a^b (N·ω) cos ω dω on the half-plane of azimuth d, Gauss–Legendre, every node that no
+// sphere blocker hides.
+float local_open(vec2 d, vec3 N, float a, float b, vec3 C, float q, bool in_light) {
     float half_w = 0.5 * (b - a), mid = 0.5 * (b + a), sum = 0.0;
     for (int e = 0; e < HFGI_NODES; ++e) {
         float om = mid + half_w * hfgi_gauss[e].x;
         vec3 dir = vec3(cos(om) * d, sin(om));
+        if (local_hidden(dir, C, q, in_light)) continue;
         sum += half_w * hfgi_gauss[e].y * cos(om) * max(dot(N, dir), 0.0);
     }
     return sum;
@@ -347,6 +515,7 @@ float local_node(int e, float mid, float half_w, vec2 d, vec3 N, vec3 C, float q
         float t_s = q / (b + sqrt(max(b * b - q, 0.0))) * co / pc.texel_size;
         if (t_hit <= t_s) return 0.0;
     }
+    if (local_hidden(u, C, q, false)) return 0.0;
     return half_w * hfgi_gauss[e].y * co * max(dot(N, u), 0.0);
 }
 
@@ -413,7 +582,7 @@ float local_light(ivec2 p, float h0, vec3 N) {
     bool pole = cos_e <= sin_a;
     uint count = pole ? pc.azimuths : pc.local_nodes;
     float phi_c = atan(l.y, l.x);
-    float beta = pole ? 0.0 : asin(min(sin_a / cos_e, 1.0));
+    float beta = pole ? 0.0 : precise_asin(min(sin_a / cos_e, 1.0));
     float dphi = 6.283185307179586 / float(pc.azimuths);
     float sum = 0.0;
     uint end = min(pc.azimuth_first + pc.azimuth_count, count);
@@ -428,19 +597,19 @@ float local_light(ivec2 p, float h0, vec3 N) {
         if (x < 0.0) continue;
         float R = length(vec2(dl, l.z));
         // Inside: δ = π/2 exactly (the formula's 0/0 where R → 0 loses it in f32).
-        float delta = in_sphere ? 1.5707963267948966 : 2.0 * asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
+        float delta = in_sphere ? 1.5707963267948966 : 2.0 * precise_asin(min(sqrt(x / ((R + cos_a) * 2.0 * R)), 1.0));
         float wc = atan(l.z, dl);
         float tangent = atan(-(N.x * d.x + N.y * d.y), N.z);
         float lo = max(wc - delta, tangent), hi = min(wc + delta, 1.5707963267948966);
         if (hi <= lo) continue;
         if (in_sphere) {
-            sum += wphi * local_open(d, N, lo, hi);
+            sum += wphi * local_open(d, N, lo, hi, C, q, true);
             continue;
         }
         // Above the horizon every direction escapes; below it, node by node.
         float hor = horizon(p, d, h0);
         float lo_open = max(lo, hor);
-        if (hi > lo_open) sum += wphi * local_open(d, N, lo_open, hi);
+        if (hi > lo_open) sum += wphi * local_open(d, N, lo_open, hi, C, q, false);
         float hi_below = min(hi, hor);
         if (hi_below > lo) sum += wphi * local_below(p, d, h0, N, lo, hi_below, C, q);
     }
@@ -452,10 +621,12 @@ void main() {
     if (p.x >= int(pc.width) || p.y >= int(pc.height) || gl_GlobalInvocationID.y >= pc.rows) return;
     float h0 = height_at(p);
     vec3 N = normal_at(p);
+    // Inside a sphere blocker: nothing, in every mode.
+    bool inside = HFGI_SPHERES > 0 && spheres_setup(p, h0);
     if (pc.cap == 2u) {
         uint o = pc.width * pc.height * uint(HFGI_N2) + uint(p.y) * pc.width + uint(p.x);
         vec3 prev = pc.accumulate != 0u ? hfgi_out[o].rgb : vec3(0.0);
-        hfgi_out[o] = vec4(prev + local_light(p, h0, N) * pc.cap_radiance.rgb, 0.0);
+        hfgi_out[o] = vec4(prev + (inside ? 0.0 : local_light(p, h0, N)) * pc.cap_radiance.rgb, 0.0);
         return;
     }
     bool sh_mode = HFGI_SHVIS != 0u;
@@ -464,7 +635,12 @@ void main() {
     float dphi = 6.283185307179586 / float(pc.azimuths);
     // Azimuths [azimuth_first, azimuth_first + azimuth_count): lavapipe truncates an
     // invocation's loops after 65535 iterations, so the host splits them into chunks.
-    for (uint a = pc.azimuth_first; a < pc.azimuth_first + pc.azimuth_count; ++a) {
+    uint end = inside ? pc.azimuth_first : pc.azimuth_first + pc.azimuth_count;
+    if (pc.cap == 3u) {
+        for (uint a = pc.azimuth_first; a < end; ++a) sphere_azimuth(p, h0, N, a);
+        end = pc.azimuth_first;
+    }
+    for (uint a = pc.azimuth_first; a < end; ++a) {
         float phi = pc.cap != 0u ? hfgi_caps[a].x : (float(a) + 0.5) * dphi;
         vec2 d = vec2(cos(phi), sin(phi));
         float hor = horizon(p, d, h0);

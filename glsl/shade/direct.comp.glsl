@@ -16,6 +16,12 @@ layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const int HFGI_INDIRECT = 0;
 layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (glossy vector pyramid)
+// Sphere blockers (docs/blockers.md §4; frame::blockers::shading_mode): 0 none; 1 product: T is
+// multiplied by their visibility V_s (binding 9); 2 log: as 1, but the environment set (set 0)
+// takes the combined exp*(f_hf + Σ f_i) (binding 9's second vector) instead of L ⊛ V_env ⊛ V_s;
+// 3 log_brdf: as 2, and the environment's diffuse irradiance is π⟨L_env, T_ρ⟩ with the transfer
+// T_ρ = exp*(f_hf + Σ f_i + f_ρ(N)) (binding 9's third vector) instead of ⟨L_env ⊛ V', cc_N⟩.
+layout(constant_id = 3) const uint HFGI_BLOCKERS = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
@@ -32,6 +38,7 @@ layout(std430, binding = 5) readonly buffer Consts {
 layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // HFGI_PLANES planes × W×H
 layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's diffuse, glossy planes
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
+layout(std430, binding = 9) readonly buffer Blockers { float hfgi_bv[]; };     // receivers × n² (× 2 in log mode)
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
@@ -61,7 +68,20 @@ vec3 normal_at(ivec2 p) {
 }
 
 vec3 hfgi_T[HFGI_N2];
+vec3 hfgi_T2[HFGI_N2]; // log mode: the environment's L ⊛ exp*(f_hf + Σ f_i)
 float hfgi_V[HFGI_N2];
+float hfgi_VS[HFGI_N2]; // the blockers' visibility at the texel
+
+// V = the receiver grid's vectors at float offset `base` (n² per receiver), bilinear.
+void hfgi_interp(uint base, uint r00, uint r10, uint r01, uint r11, vec4 w, bool from_blockers) {
+    uint n2 = uint(HFGI_N2);
+    for (int k = 0; k < HFGI_N2; ++k) {
+        uint o = base + uint(k);
+        hfgi_V[k] = from_blockers
+            ? w.x * hfgi_bv[o + r00 * n2] + w.y * hfgi_bv[o + r10 * n2] + w.z * hfgi_bv[o + r01 * n2] + w.w * hfgi_bv[o + r11 * n2]
+            : w.x * hfgi_vis[o + r00 * n2] + w.y * hfgi_vis[o + r10 * n2] + w.z * hfgi_vis[o + r01 * n2] + w.w * hfgi_vis[o + r11 * n2];
+    }
+}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -81,7 +101,10 @@ void main() {
     float w00 = (1.0 - f.x) * (1.0 - f.y), w10 = f.x * (1.0 - f.y), w01 = (1.0 - f.x) * f.y, w11 = f.x * f.y;
     uint receivers = pc.work_width * pc.work_height;
 
-    for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] = vec3(0.0);
+    for (int k = 0; k < HFGI_N2; ++k) {
+        hfgi_T[k] = vec3(0.0);
+        hfgi_T2[k] = vec3(0.0);
+    }
     if (HFGI_INDIRECT != 0) {
         // Incident indirect radiance: U of eq. 21, bilinear from the receiver grid.
         for (int k = 0; k < HFGI_N2; ++k) {
@@ -100,12 +123,28 @@ void main() {
                       + w01 * hfgi_vis[base + r01 * uint(HFGI_N2) + uint(k)] + w11 * hfgi_vis[base + r11 * uint(HFGI_N2) + uint(k)];
         }
         uint lbase = s * uint(HFGI_N2);
+        bool combined = HFGI_BLOCKERS >= 2u && s == 0u; // log modes: the environment's own vector
+        if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
         // T_k += Σ_ij Γ_ijk L_i V_j (every ordered (i, j, k) is stored).
         for (uint e = 0u; e < hfgi_triple_count; ++e) {
             uvec2 t = hfgi_triple[e];
             uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
-            hfgi_T[k] += uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light[lbase + i].rgb;
+            vec3 add = uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light[lbase + i].rgb;
+            if (combined) hfgi_T2[k] += add; else hfgi_T[k] += add;
         }
+    }
+    if (HFGI_BLOCKERS != 0u) {
+        // T ← T ⊛ V_s (+ the log mode's environment term), truncated to order n.
+        hfgi_interp(0u, r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+        for (int k = 0; k < HFGI_N2; ++k) hfgi_VS[k] = hfgi_V[k];
+        vec3 W[HFGI_N2];
+        for (int k = 0; k < HFGI_N2; ++k) W[k] = hfgi_T2[k];
+        for (uint e = 0u; e < hfgi_triple_count; ++e) {
+            uvec2 t = hfgi_triple[e];
+            uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
+            W[k] += uintBitsToFloat(t.y) * hfgi_VS[j] * hfgi_T[i];
+        }
+        for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] = W[k];
     }
 
     // Diffuse: E = Σ_k T_k c_k with c the clamped cosine ZH rotated to N.
@@ -115,6 +154,16 @@ void main() {
         for (int m = -l; m <= l; ++m) {
             int k = l * (l + 1) + m;
             E += hfgi_T[k] * (hfgi_zh_diffuse[l] * hfgi_y[k]);
+        }
+    }
+    if (HFGI_BLOCKERS == 3u && HFGI_INDIRECT == 0 && pc.set_count > 0u) {
+        // log_brdf: the environment's diffuse term from its transfer vector (seed 001 §5).
+        hfgi_interp(2u * receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+        for (int l = 0; l < HFGI_N; ++l) {
+            for (int m = -l; m <= l; ++m) {
+                int k = l * (l + 1) + m;
+                E += 3.14159265358979 * hfgi_V[k] * hfgi_light[uint(k)].rgb - hfgi_T2[k] * (hfgi_zh_diffuse[l] * hfgi_y[k]);
+            }
         }
     }
     vec3 rho = pc.albedo_map != 0u ? hfgi_albedo[uint(p.y) * pc.width + uint(p.x)].rgb : pc.albedo.rgb;

@@ -125,7 +125,15 @@ const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
 
 impl IndirectPass {
-    pub fn new(ctx: &Context, pyramid: &HeightPyramid, shade: &ShadePass, scene: &Scene) -> Result<Self> {
+    /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
+    /// bounce's incident radiance is multiplied by it, docs/blockers.md §4).
+    pub fn new(
+        ctx: &Context,
+        pyramid: &HeightPyramid,
+        shade: &ShadePass,
+        blockers: Option<&Buffer>,
+        scene: &Scene,
+    ) -> Result<Self> {
         let gi = &scene.gi;
         let n = gi.sh_order;
         let (w, h) = (scene.field.width(), scene.field.height());
@@ -218,9 +226,9 @@ impl IndirectPass {
             let sh = ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 9],
+                &[DescriptorKind::StorageBuffer; 10],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32), (1, 1), (2, vector as u32)],
+                &[(0, n as u32), (1, 1), (2, vector as u32), (3, super::blockers::shading_mode(scene))],
                 1,
             )?;
             let sh = pipes.push_get(sh);
@@ -236,6 +244,7 @@ impl IndirectPass {
                     Bind::Buffer(output),
                     Bind::Buffer(&bufs[BOUNCE]),
                     Bind::Buffer(&bufs[INCIDENT]),
+                    Bind::Buffer(blockers.unwrap_or(output)), // unread without spheres
                 ],
             )?;
             Ok((scan_set, shade_set, push))

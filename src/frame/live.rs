@@ -25,7 +25,7 @@ use super::visibility::{SetKind, VisibilityData};
 use crate::error::{Error, Result};
 use crate::math::triple;
 use crate::rules::lighting::light_sets_with;
-use crate::scene::model::{Albedo, Camera, Environment, KeyLight, LocalLight, Material, Scene};
+use crate::scene::model::{Albedo, Camera, Environment, KeyLight, LocalLight, Material, Scene, SphereBlocker};
 use crate::vk::{barrier, Recorder};
 
 /// Largest data one `vkCmdUpdateBuffer` may write (Vulkan: 65536 bytes).
@@ -40,6 +40,19 @@ pub struct RendererOptions {
     /// Local-light slots: the most local lights [`Renderer::set_local_lights`] accepts
     /// (default and minimum: the scene's count; 0 creates no local-light pass).
     pub local_lights: Option<usize>,
+    /// Sphere-blocker slots: the most spheres [`Renderer::set_spheres`] accepts (default and
+    /// minimum: the scene's count; 0 creates no blocker pass).
+    pub spheres: Option<usize>,
+}
+
+/// A sphere slot without a sphere: one texel wide, far below any surface and culled there
+/// (below every receiver's tangent plane).
+pub fn dark_sphere(texel_size: f64) -> SphereBlocker {
+    SphereBlocker {
+        center: DVec3::new(0.0, 0.0, -crate::scene::model::limits::MAX_COORDINATE),
+        radius: texel_size,
+        albedo: [0.0; 3],
+    }
 }
 
 /// A local-light slot without a light: no radiance (the shader skips it).
@@ -77,8 +90,20 @@ pub fn with_slots(scene: &Scene, opts: &RendererOptions) -> Result<Scene> {
         ));
     }
     s.local_lights.resize(local, dark_local_light(scene.texel_size));
+    let spheres = opts.spheres.unwrap_or(scene.spheres.len());
+    if spheres < scene.spheres.len() || spheres > MAX_SPHERES {
+        return Err(Error::param(
+            "RendererOptions::spheres",
+            spheres,
+            format!("at least the scene's {} spheres and at most {MAX_SPHERES}", scene.spheres.len()),
+        ));
+    }
+    s.spheres.resize(spheres, dark_sphere(scene.texel_size));
     Ok(s)
 }
+
+/// Most sphere-blocker slots.
+pub const MAX_SPHERES: usize = 1024;
 
 /// Most local-light slots (each costs its horizon marches at every texel).
 pub const MAX_LOCAL_LIGHTS: usize = 256;
@@ -131,6 +156,9 @@ impl Live {
         self.pending.upload_bytes = 0;
         if has(Stage::VisibilityKeyLights) {
             self.pending.key_lights_moved = false;
+        }
+        if has(Stage::VisibilityBlockers) {
+            self.pending.spheres_moved = false;
         }
         let (direct, indirect) = (has(Stage::ShadeDirect), has(Stage::IndirectShade(1)));
         if direct {
@@ -242,6 +270,32 @@ impl Renderer {
         self.live.update(dst, offset, bytes);
         self.live.scene.local_lights = next;
         self.live.changed(Changes::LOCAL_LIGHTS);
+        Ok(())
+    }
+
+    /// Sets the sphere blockers: at most the renderer's slots ([`RendererOptions::spheres`]);
+    /// the slots left over hold no sphere. A change re-runs `visibility.blockers` and the
+    /// shading (direct and bounces) at the next [`Renderer::record`].
+    pub fn set_spheres(&mut self, spheres: &[SphereBlocker]) -> Result<()> {
+        let slots = self.live.scene.spheres.len();
+        let Some(pass) = self.blockers.as_ref().filter(|_| spheres.len() <= slots) else {
+            return Err(Error::param(
+                "spheres",
+                spheres.len(),
+                format!("at most {slots} (the sphere slots fixed at creation: RendererOptions::spheres)"),
+            ));
+        };
+        let s = self.live.scene.texel_size;
+        for (k, b) in spheres.iter().enumerate() {
+            b.check(k, s)?;
+        }
+        let mut next: Vec<SphereBlocker> = spheres.to_vec();
+        next.resize(slots, dark_sphere(s));
+        let (dst, offset, bytes) = pass.sphere_update(&next);
+        self.live.update(dst, offset, bytes);
+        self.live.scene.spheres = next;
+        self.live.pending.spheres_moved = true;
+        self.live.changed(Changes::SPHERES);
         Ok(())
     }
 

@@ -108,6 +108,7 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     if let Some(plan) = visibility::sweep_plan(scene) {
         e.buffers(plan.buffer_sizes());
     }
+    e.buffers(super::blockers::buffer_sizes(scene));
     e.buffers(shade::upload_sizes(scene));
     e.buffer(shade::OUTPUT_BUFFER, shade::output_bytes(w, h));
     e.buffer(shade::INCIDENT_BUFFER, shade::incident_bytes(scene));
@@ -189,6 +190,10 @@ pub fn view_with(scene: &Scene, targets: &ViewTargets) -> Result<MemoryEstimate>
         e.buffers.push((a.name.to_string(), pixels * texel_bytes(a.format)? * u64::from(a.samples)));
     }
     e.buffer(view::INDEX_BUFFER, view::index_bytes(w));
+    if scene.spheres.iter().any(view::sphere_is_live) {
+        e.buffer(view::SPHERE_BUFFER, view::sphere_buffer_bytes(scene.spheres.len()));
+        e.buffer(view::SPHERE_LIGHT_BUFFER, view::sphere_light_bytes(scene.key_lights.len()));
+    }
     Ok(e)
 }
 

@@ -2,6 +2,7 @@
 //! caller's command buffer through [`crate::vk::Recorder`] and has a CPU twin in
 //! [`crate::reference`].
 
+pub mod blockers;
 pub mod indirect;
 pub mod live;
 pub mod local;

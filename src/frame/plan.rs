@@ -75,8 +75,9 @@ impl Changes {
     /// The direct light that the indirect bounces read was re-shaded after them (amortisation).
     pub const DIRECT_LIGHT: Changes = Changes(16);
     pub const LOCAL_LIGHTS: Changes = Changes(32);
-    const NAMES: [&'static str; 6] =
-        ["environment", "key lights", "material", "camera", "the direct light it reads", "local lights"];
+    pub const SPHERES: Changes = Changes(64);
+    const NAMES: [&'static str; 7] =
+        ["environment", "key lights", "material", "camera", "the direct light it reads", "local lights", "spheres"];
 
     pub fn is_empty(self) -> bool {
         self.0 == 0
@@ -114,6 +115,8 @@ pub struct Pending {
     pub upload_bytes: u64,
     /// Key lights moved or resized since their visibility was computed.
     pub key_lights_moved: bool,
+    /// Sphere blockers moved or resized since their visibility was computed.
+    pub spheres_moved: bool,
     /// Why the direct shading is out of date (empty: up to date).
     pub direct: Changes,
     /// Why the indirect shading is out of date (empty: up to date).
@@ -206,6 +209,8 @@ pub struct Planner {
     key_light_azimuths: u32,
     local_lights: usize,
     local_light_azimuths: u32,
+    spheres: usize,
+    blockers: String,
     bounces: u32,
     albedo: bool,
     specular: bool,
@@ -250,6 +255,14 @@ impl Planner {
             key_light_azimuths: gi.key_light_azimuths,
             local_lights: scene.local_lights.len(),
             local_light_azimuths: gi.local_light_azimuths,
+            spheres: scene.spheres.len(),
+            blockers: format!(
+                "ε = {}, {} exponentiation, {} shading{}",
+                gi.blocker_epsilon,
+                gi.blocker_exp,
+                gi.blocker_shading,
+                if gi.blocker_ratio { ", ratio attenuation" } else { "" }
+            ),
             bounces: gi.bounces,
             albedo,
             specular: m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0)),
@@ -351,6 +364,12 @@ impl Planner {
             } else {
                 add(&mut omitted, Stage::VisibilityKeyLights, "no key lights".into());
             }
+            if self.spheres > 0 {
+                let (k, b) = (self.spheres, &self.blockers);
+                add(&mut stages, Stage::VisibilityBlockers, format!("{k} sphere blocker{} ({b}); {why}", plural(k)));
+            } else {
+                add(&mut omitted, Stage::VisibilityBlockers, "no sphere blockers".into());
+            }
         } else {
             let why = "heights unchanged since the last frame: the pyramid is kept";
             add(&mut omitted, Stage::PyramidDecimate, why.into());
@@ -369,6 +388,12 @@ impl Planner {
                 add(&mut stages, Stage::VisibilityKeyLights, r.into());
             } else if self.key_lights > 0 {
                 add(&mut omitted, Stage::VisibilityKeyLights, why.into());
+            }
+            if self.spheres > 0 && pend.spheres_moved {
+                let r = "sphere blockers moved or resized: their visibility is recomputed (heights unchanged)";
+                add(&mut stages, Stage::VisibilityBlockers, r.into());
+            } else if self.spheres > 0 {
+                add(&mut omitted, Stage::VisibilityBlockers, why.into());
             }
         }
         // 2. Direct shading and 3. the bounces, amortised over static frames (§7).

@@ -6,6 +6,7 @@
 //! Inputs: the scene (heights, lights, material, settings). Output: the shading buffer of
 //! [`ShadePass`] (see its docs for the layout). Intermediates are private.
 
+use super::blockers::BlockerPass;
 use super::indirect::IndirectPass;
 use super::live::{self, Live, RendererOptions};
 use super::local::LocalLightPass;
@@ -47,6 +48,8 @@ pub struct RendererStats {
 pub struct Renderer {
     pub pyramid: HeightPyramid,
     pub visibility: VisibilityPass,
+    /// Present when the scene has sphere blockers (docs/blockers.md).
+    pub blockers: Option<BlockerPass>,
     pub shade: ShadePass,
     /// Present when the scene has local lights (docs/local-lights.md).
     pub local: Option<LocalLightPass>,
@@ -90,9 +93,23 @@ impl Renderer {
                 return Err(e);
             }
         };
-        let shade = match ShadePass::new(ctx, &pyramid, &visibility, scene) {
+        let blockers = match (!scene.spheres.is_empty())
+            .then(|| BlockerPass::new(ctx, &pyramid, &visibility, scene))
+            .transpose()
+        {
+            Ok(b) => b,
+            Err(e) => {
+                visibility.destroy(ctx);
+                pyramid.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let shade = match ShadePass::new(ctx, &pyramid, &visibility, blockers.as_ref().map(|b| b.output()), scene) {
             Ok(s) => s,
             Err(e) => {
+                if let Some(b) = blockers {
+                    b.destroy(ctx);
+                }
                 visibility.destroy(ctx);
                 pyramid.destroy(ctx);
                 return Err(e);
@@ -106,19 +123,25 @@ impl Renderer {
             Ok(l) => l,
             Err(e) => {
                 shade.destroy(ctx);
+                if let Some(b) = blockers {
+                    b.destroy(ctx);
+                }
                 visibility.destroy(ctx);
                 pyramid.destroy(ctx);
                 return Err(e);
             }
         };
         let indirect = if planner.creates_indirect() {
-            match IndirectPass::new(ctx, &pyramid, &shade, scene) {
+            match IndirectPass::new(ctx, &pyramid, &shade, blockers.as_ref().map(|b| b.output()), scene) {
                 Ok(i) => Some(i),
                 Err(e) => {
                     if let Some(l) = local {
                         l.destroy(ctx);
                     }
                     shade.destroy(ctx);
+                    if let Some(b) = blockers {
+                        b.destroy(ctx);
+                    }
                     visibility.destroy(ctx);
                     pyramid.destroy(ctx);
                     return Err(e);
@@ -130,6 +153,7 @@ impl Renderer {
         Ok(Self {
             pyramid,
             visibility,
+            blockers,
             shade,
             local,
             indirect,
@@ -185,6 +209,7 @@ impl Renderer {
             Stage::PyramidMax => ind.into_iter().for_each(|i| i.record_max(rec)),
             Stage::VisibilityEnvironment => self.visibility.record_sets(rec, true),
             Stage::VisibilityKeyLights => self.visibility.record_sets(rec, false),
+            Stage::VisibilityBlockers => self.blockers.iter().for_each(|b| b.record(rec)),
             Stage::ShadeDirect => self.shade.record(rec),
             Stage::ShadeLocalLights => self.local.iter().for_each(|l| l.record(rec)),
             Stage::RadianceGather(b) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec, b)),
@@ -345,6 +370,9 @@ impl Renderer {
             };
             out.push((name, self.visibility.read(ctx, i)?));
         }
+        if let Some(b) = &self.blockers {
+            out.push(("visibility.blockers".to_string(), b.read(ctx)?));
+        }
         let planes = ["total", "direct", "indirect", "glossy", "glossy_direct", "glossy_indirect"];
         for (p, name) in planes.iter().enumerate() {
             out.push((format!("shade.{name}"), self.shade.read_plane(ctx, p)?));
@@ -372,6 +400,7 @@ impl Renderer {
             + self.visibility.memory_bytes()
             + self.shade.memory_bytes()
             + self.local.as_ref().map_or(0, |l| l.memory_bytes())
+            + self.blockers.as_ref().map_or(0, |b| b.memory_bytes())
             + self.indirect.as_ref().map_or(0, |i| i.memory_bytes())
     }
 
@@ -383,6 +412,9 @@ impl Renderer {
             l.destroy(ctx);
         }
         self.shade.destroy(ctx);
+        if let Some(b) = self.blockers {
+            b.destroy(ctx);
+        }
         self.visibility.destroy(ctx);
         self.pyramid.destroy(ctx);
     }

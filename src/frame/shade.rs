@@ -44,8 +44,8 @@ pub const PLANES: usize = constants::PLANES as usize;
 /// Layer names as exported (CONVENTIONS.md): the total is the default layer.
 pub const LAYER_NAMES: [&str; 4] = ["", "direct", "indirect", "glossy"];
 
-/// The constants block of the shader: K_l^m table, rotated-ZH band factors, triple count.
-pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
+/// `K_l^|m|` (times √2 for m ≠ 0) at index `l(l+1)+m`, as `glsl/inc/hfgi_sh.glsl` reads it.
+pub(crate) fn klm_table(n: usize) -> [f32; (constants::MAX_SH_ORDER * constants::MAX_SH_ORDER) as usize] {
     const N: usize = constants::MAX_SH_ORDER as usize;
     let mut klm = [0f32; N * N];
     for l in 0..n {
@@ -54,6 +54,13 @@ pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> 
             klm[l * (l + 1) + m] = k as f32;
         }
     }
+    klm
+}
+
+/// The constants block of the shader: K_l^m table, rotated-ZH band factors, triple count.
+pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
+    const N: usize = constants::MAX_SH_ORDER as usize;
+    let klm = klm_table(n);
     let cc = zh::clamped_cosine(n);
     let mut diffuse = [0f32; N];
     let mut glossy = [0f32; N];
@@ -198,7 +205,15 @@ pub struct ShadePass {
 }
 
 impl ShadePass {
-    pub fn new(ctx: &Context, pyramid: &HeightPyramid, vis: &VisibilityPass, scene: &Scene) -> Result<Self> {
+    /// `blockers`: the sphere blockers' visibility buffer (`visibility.blockers`), when the
+    /// scene has spheres.
+    pub fn new(
+        ctx: &Context,
+        pyramid: &HeightPyramid,
+        vis: &VisibilityPass,
+        blockers: Option<&Buffer>,
+        scene: &Scene,
+    ) -> Result<Self> {
         let n = scene.gi.sh_order;
         let store_t = super::renderer::vector_pyramid(scene);
         let (w, h) = (scene.field.width(), scene.field.height());
@@ -227,9 +242,9 @@ impl ShadePass {
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 9],
+                &[DescriptorKind::StorageBuffer; 10],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32), (1, 0), (2, store_t as u32)],
+                &[(0, n as u32), (1, 0), (2, store_t as u32), (3, super::blockers::shading_mode(scene))],
                 1,
             )?);
             p.allocate_set(
@@ -244,6 +259,7 @@ impl ShadePass {
                     Bind::Buffer(&bufs[4]),
                     Bind::Buffer(&bufs[4]), // bounce output: unused by the direct mode
                     Bind::Buffer(&bufs[5]),
+                    Bind::Buffer(blockers.unwrap_or(&bufs[4])), // unread without spheres
                 ],
             )
         })();

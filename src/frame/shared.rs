@@ -161,6 +161,32 @@ pub struct LocalPush {
     pub albedo: [f32; 4],
 }
 
+/// `hfgi_BlockerPush`: push constants of the sphere blockers' visibility (`visibility.blockers`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BlockerPush {
+    pub width: u32,
+    pub height: u32,
+    pub work_width: u32,
+    pub work_height: u32,
+    /// Sphere slots.
+    pub sphere_count: u32,
+    /// Nodes of the exponentiation's quadrature.
+    pub quad_count: u32,
+    pub texel_size: f32,
+    /// `ln ε`.
+    pub log_eps: f32,
+    /// 1: ratio attenuation.
+    pub ratio: u32,
+    /// Log mode: first float of the environment set's `V` in the visibility buffer.
+    pub env_offset: u32,
+    /// Spacing of the OL tables.
+    pub ol_step: f32,
+    /// Primal mode: entries of the SH triple-product table.
+    pub triple_count: u32,
+    pub pad: [u32; 4],
+}
+
 /// `hfgi_ShadePush`: push constants of the direct shading pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -304,12 +330,15 @@ pub struct TruthPush {
     /// 1: the dispatch integrates the key light `cap_*` over the cap-sample buffer's entries
     /// `[azimuth_first, azimuth_first + azimuth_count)` (exact reference, direct light);
     /// 2: the local light `local_*` over its per-receiver samples `[azimuth_first,
-    /// azimuth_first + azimuth_count)` (both variants, direct light).
+    /// azimuth_first + azimuth_count)` (both variants, direct light); 3: the sphere blockers'
+    /// blocked parts over their flattened per-receiver samples `[azimuth_first,
+    /// azimuth_first + azimuth_count)` of `[0, S·max(azimuths, local_nodes))` (both variants,
+    /// direct light; spheres in binding 7).
     pub cap: u32,
     /// 1: add to the output buffer; 0: overwrite it (the first dispatch of a pass).
     pub accumulate: u32,
-    /// Local light: azimuth samples of a cap holding no pole (the cap buffer's first
-    /// `local_nodes` entries, `(sin u, π/2·w·cos u)`).
+    /// Local light or sphere blocker: azimuth samples of a cap holding no pole (the cap
+    /// buffer's first `local_nodes` entries, `(sin u, π/2·w·cos u)`).
     pub local_nodes: u32,
     /// Key light: unit direction, `cos α` in `w`.
     pub cap_dir: [f32; 4],
@@ -326,6 +355,7 @@ const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
 const _: () = assert!(std::mem::size_of::<LocalPush>() == 48);
+const _: () = assert!(std::mem::size_of::<BlockerPush>() == 64);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);
 
@@ -429,6 +459,20 @@ mod layout_against_glsl {
             specular,
             albedo,
             camera_lo
+        });
+        layout!(BlockerPush {
+            width,
+            height,
+            work_width,
+            work_height,
+            sphere_count,
+            quad_count,
+            texel_size,
+            log_eps,
+            ratio,
+            env_offset,
+            ol_step,
+            triple_count
         });
         layout!(LocalPush { width, height, light_count, azimuths, texel_size, albedo_map, albedo });
         layout!(IndirectPush {

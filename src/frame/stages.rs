@@ -46,6 +46,12 @@ pub const STAGES: &[StageInfo] = &[
         true,
     ),
     row(
+        "visibility.blockers",
+        "BlockerPass",
+        "sphere blockers, and the heights changed or a sphere moved (set_spheres)",
+        true,
+    ),
+    row(
         "shade.direct",
         "ShadePass",
         "the heights changed, or the direct light is out of date (amortised: an even frame when both halves are)",
@@ -126,6 +132,8 @@ pub enum Stage {
     PyramidMax,
     VisibilityEnvironment,
     VisibilityKeyLights,
+    /// The sphere blockers' log-SH visibility, exponentiated.
+    VisibilityBlockers,
     ShadeDirect,
     /// The local lights' diffuse light, added to what `ShadeDirect` wrote.
     ShadeLocalLights,
@@ -146,13 +154,14 @@ impl Stage {
             Stage::PyramidMax => 3,
             Stage::VisibilityEnvironment => 4,
             Stage::VisibilityKeyLights => 5,
-            Stage::ShadeDirect => 6,
-            Stage::ShadeLocalLights => 7,
-            Stage::RadianceGather(_) => 8,
-            Stage::RadianceDecimate(_) => 9,
-            Stage::RadianceSynthesize(_) => 10,
-            Stage::IndirectScan(_) => 11,
-            Stage::IndirectShade(_) => 12,
+            Stage::VisibilityBlockers => 6,
+            Stage::ShadeDirect => 7,
+            Stage::ShadeLocalLights => 8,
+            Stage::RadianceGather(_) => 9,
+            Stage::RadianceDecimate(_) => 10,
+            Stage::RadianceSynthesize(_) => 11,
+            Stage::IndirectScan(_) => 12,
+            Stage::IndirectShade(_) => 13,
         }]
     }
 
@@ -185,6 +194,7 @@ mod tests {
             Stage::PyramidMax,
             Stage::VisibilityEnvironment,
             Stage::VisibilityKeyLights,
+            Stage::VisibilityBlockers,
             Stage::ShadeDirect,
             Stage::ShadeLocalLights,
             Stage::RadianceGather(1),

@@ -22,6 +22,16 @@
 //! `E = Σ L ∫ max(N·ω, 0) dω` into a region of the output buffer after the `W·H·n²` texels',
 //! which the host adds as `ρ/π · E` to the finished direct exit radiance, as the CPU does.
 //!
+//! Sphere blockers (both variants; [`crate::reference::cap::SphereCaps`] and `gaps` are the
+//! f64 twins): the spheres go to binding 7 (per sphere its centre as a high and a low f32 and
+//! its radius), their count is specialization constant 5. A receiver inside one gets nothing.
+//! The direct pass adds, after the key lights, the sphere dispatches (`cap = 3`): over the
+//! flattened samples `[0, S·max(A, cap_nodes))` (sphere `a / M`, its per-receiver sample
+//! `a % M`, chosen like a local light's), each takes out the environment on its window within
+//! the open interval, less the windows of the spheres before it. The key-light dispatches
+//! integrate their window minus every sphere's window, the local lights' and the bounces'
+//! nodes drop what a sphere hides (docs/accuracy.md §1).
+//!
 //! This is a measuring tool, not a frame pass: it owns its buffers and submits on its own
 //! (`Context::submit_and_wait`).
 
@@ -61,14 +71,21 @@ pub fn ray_iterations(w: usize, h: usize, wrap: bool, settings: &TruthSettings) 
     }
 }
 
-/// Azimuths per dispatch for a `w × h` field: the ray (twice for a bounce: horizon, then the
-/// sweep of the blocked nodes) plus the Gauss–Legendre nodes with their SH loops must fit
-/// [`LOOP_BUDGET`]. Cap samples (one ray and the nodes) use the same chunk.
-pub fn azimuth_chunk(w: usize, h: usize, wrap: bool, settings: &TruthSettings, n: usize) -> u32 {
+/// Azimuths per dispatch for a `w × h` field with `spheres` sphere blockers: the ray (twice for
+/// a bounce: horizon, then the sweep of the blocked nodes) plus the Gauss–Legendre nodes with
+/// their SH loops must fit [`LOOP_BUDGET`]. Cap and sphere samples (one ray and the nodes)
+/// use the same chunk. With spheres an interval splits into up to `S + 1` gaps (each its
+/// nodes; a bounce node tests the `S` spheres), found by a cursor sweep of up to
+/// `(S + 1)²·S` steps.
+pub fn azimuth_chunk(w: usize, h: usize, wrap: bool, settings: &TruthSettings, n: usize, spheres: usize) -> u32 {
     // Per node 12·n² + 16: at order 6 the bounce pass in SH mode overran with 3·n² + 16 (the
     // SH evaluation and the RGB accumulation are loops the compiler keeps at that order; the
     // GPU-vs-CPU test at orders 6 and 8 in tests/truth.rs found it: 138% off).
-    let per_azimuth = 2 * ray_iterations(w, h, wrap, settings) + settings.nodes as u64 * (12 * (n * n) as u64 + 16) + 4;
+    let s = spheres as u64;
+    let per_azimuth = 2 * ray_iterations(w, h, wrap, settings)
+        + (s + 1) * settings.nodes as u64 * (12 * (n * n) as u64 + 16)
+        + s * (s + 1) * (s + 2)
+        + 4;
     (LOOP_BUDGET / per_azimuth).clamp(1, 64) as u32
 }
 
@@ -83,11 +100,12 @@ pub fn render_truth_gpu(
     render_truth_gpu_timed(ctx, scene, settings, progress).map(|(o, _)| o)
 }
 
-/// The cap buffer (binding 6): the local lights' azimuth factors
-/// ([`cap_node_factors`], `cap_nodes` entries, only when the scene has local lights), then every
-/// key light's samples `(φ, weight)`; and the index of the first key-light sample.
+/// The cap buffer (binding 6): the local lights' and spheres' azimuth factors
+/// ([`cap_node_factors`], `cap_nodes` entries, only when the scene has local lights or
+/// spheres), then every key light's samples `(φ, weight)`; and the index of the first
+/// key-light sample.
 fn cap_buffer(scene: &Scene, settings: &TruthSettings) -> (Vec<[f32; 2]>, u32) {
-    let mut out: Vec<[f32; 2]> = if scene.local_lights.is_empty() {
+    let mut out: Vec<[f32; 2]> = if scene.local_lights.is_empty() && scene.spheres.is_empty() {
         Vec::new()
     } else {
         cap_node_factors(settings.cap_nodes).iter().map(|(x, w)| [*x as f32, *w as f32]).collect()
@@ -107,11 +125,27 @@ fn split(v: glam::DVec3) -> ([f32; 3], [f32; 3]) {
     (hi, lo)
 }
 
+/// The sphere buffer (binding 7): per sphere `(c_hi, r)` and `(c_lo, 0)` (one empty sphere's
+/// worth when there are none: a buffer cannot be empty).
+fn sphere_buffer(scene: &Scene) -> Vec<[f32; 4]> {
+    let mut out = Vec::with_capacity(2 * scene.spheres.len().max(1));
+    for b in &scene.spheres {
+        let (hi, lo) = split(b.center);
+        out.push([hi[0], hi[1], hi[2], b.radius as f32]);
+        out.push([lo[0], lo[1], lo[2], 0.0]);
+    }
+    if out.is_empty() {
+        out.resize(2, [0.0; 4]);
+    }
+    out
+}
+
 /// The push constants of every dispatch of one pass over rows `[row, row + rows)` (texel-wide
 /// fields set, `indirect`/rows left to the caller): the environment's (or the bounce's)
 /// uniform azimuths in chunks, then, for the exact direct light, each key light's samples,
-/// then, for the direct light of both variants, each local light's (the first of those with
-/// `accumulate = 0`: they have their own output region).
+/// then, for the direct light of both variants, the spheres' samples (`cap = 3`, all spheres
+/// flattened, `max(A, cap_nodes)` per sphere), then each local light's (the first of those
+/// with `accumulate = 0`: they have their own output region).
 fn pass_pushes(scene: &Scene, settings: &TruthSettings, indirect: bool, chunk: u32) -> Vec<TruthPush> {
     let (w, h) = (scene.field.width(), scene.field.height());
     let base = TruthPush {
@@ -153,6 +187,10 @@ fn pass_pushes(scene: &Scene, settings: &TruthSettings, indirect: bool, chunk: u
             offset += samples.len() as u32;
         }
     }
+    if !indirect && !scene.spheres.is_empty() {
+        let per = settings.azimuths.max(settings.cap_nodes);
+        add(TruthPush { cap: 3, local_nodes: settings.cap_nodes, ..base }, 0, per * scene.spheres.len() as u32);
+    }
     if !indirect {
         for light in &scene.local_lights {
             let (hi, lo) = split(light.position);
@@ -192,6 +230,7 @@ pub fn render_truth_gpu_timed(
     let gauss: Vec<[f32; 2]> = gx.iter().zip(&gw).map(|(x, wt)| [*x as f32, *wt as f32]).collect();
     let light32: Vec<[f32; 4]> = light.iter().map(|l| [l[0] as f32, l[1] as f32, l[2] as f32, 0.0]).collect();
     let caps = cap_buffer(scene, settings).0;
+    let spheres = sphere_buffer(scene);
     let consts = super::shade::constants(n, 1.0, 0);
     let usage =
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -208,6 +247,7 @@ pub fn render_truth_gpu_timed(
             // Per texel n² vec4, then the local lights' E (one vec4 per texel).
             ("hfgi.truth.out", (w * h * (n * n + 1) * 16) as u64),
             ("hfgi.truth.caps", (caps.len() * 8) as u64),
+            ("hfgi.truth.spheres", (spheres.len() * 16) as u64),
         ] {
             bufs.push(Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)?);
         }
@@ -216,10 +256,11 @@ pub fn render_truth_gpu_timed(
         memory::upload(ctx, &bufs[3], 0, bytemuck::cast_slice(&gauss))?;
         memory::upload(ctx, &bufs[4], 0, bytemuck::cast_slice(&consts))?;
         memory::upload(ctx, &bufs[6], 0, bytemuck::cast_slice(&caps))?;
+        memory::upload(ctx, &bufs[7], 0, bytemuck::cast_slice(&spheres))?;
         let p = pipe.insert(ComputePipeline::new(
             ctx,
             &shaders::REFERENCE_TRUTH_COMP,
-            &[DescriptorKind::StorageBuffer; 7],
+            &[DescriptorKind::StorageBuffer; 8],
             std::mem::size_of::<TruthPush>() as u32,
             &[
                 (0, n as u32),
@@ -227,6 +268,7 @@ pub fn render_truth_gpu_timed(
                 (2, scene.wrap as u32),
                 (3, settings.march as u32),
                 (4, settings.sh_visibility as u32),
+                (5, scene.spheres.len() as u32),
             ],
             1,
         )?);
@@ -286,7 +328,7 @@ impl Passes<'_> {
         let (w, h) = (scene.field.width(), scene.field.height());
         let n2 = scene.gi.sh_order * scene.gi.sh_order;
         let rows_per_band = (16384 / w.max(1)).clamp(1, h) as u32;
-        let chunk = azimuth_chunk(w, h, scene.wrap, settings, scene.gi.sh_order);
+        let chunk = azimuth_chunk(w, h, scene.wrap, settings, scene.gi.sh_order, scene.spheres.len());
         let pushes = pass_pushes(scene, settings, indirect, chunk);
         let (pipe, set) = (self.pipe, self.set);
         let mut row = 0u32;

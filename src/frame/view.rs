@@ -22,8 +22,10 @@
 //!    COLOR_ATTACHMENT_OPTIMAL and the depth image → DEPTH_STENCIL_ATTACHMENT_OPTIMAL, each after
 //!    the previous frame's attachment writes.
 //! 3. Dynamic rendering (`vkCmdBeginRendering`): clear to [`BACKGROUND`] and depth 0 (reversed
-//!    depth), one indexed instanced draw, and at the end of rendering the MSAA resolve
-//!    (`AVERAGE`) into the output image. With one sample the output is rendered directly.
+//!    depth), one indexed instanced draw, with live sphere blockers ([`ViewPass::set_spheres`])
+//!    a second pipeline's instanced draw of one UV sphere per sphere (same depth buffer), and
+//!    at the end of rendering the MSAA resolve (`AVERAGE`) into the output image. With one
+//!    sample the output is rendered directly.
 //! 4. The output image → **TRANSFER_SRC_OPTIMAL**, colour-attachment writes → transfer reads
 //!    (`COPY`). That is the layout it is left in; a host that samples it adds its own
 //!    transition (TRANSFER_SRC_OPTIMAL → SHADER_READ_ONLY_OPTIMAL).
@@ -41,13 +43,15 @@ use ash::vk;
 use glam::{DMat4, DVec3, DVec4};
 use gpu_allocator::MemoryLocation;
 
+use bytemuck::{Pod, Zeroable};
+
 use super::shared::ViewPush;
 use super::Renderer;
 use crate::error::{Error, Result};
-use crate::scene::model::{Camera, Scene};
+use crate::scene::model::{Camera, Environment, KeyLight, Scene, SphereBlocker};
 use crate::shaders;
 use crate::vk::barrier::{self, Transition};
-use crate::vk::graphics::{self, GraphicsDesc, RenderTargets, TargetChoice};
+use crate::vk::graphics::{self, GraphicsDesc, RenderTargets, TargetChoice, GRAPHICS_STAGES};
 use crate::vk::pipeline::Bind;
 use crate::vk::{memory, Buffer, Context, DescriptorKind, GraphicsPipeline, Image, Recorder};
 
@@ -112,6 +116,30 @@ impl CameraModel {
     /// Builds the model for a `field_w × field_h` field of texel size `s` whose heights lie in
     /// `lo..=hi`. Errors on a non-finite or degenerate camera.
     pub fn new(camera: &Camera, field_w: usize, field_h: usize, s: f64, lo: f64, hi: f64) -> Result<Self> {
+        Self::check(camera, s)?;
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(Error::param("height range", format!("{lo}..{hi}"), "finite lo ≤ hi"));
+        }
+        let (x1, y1) = ((field_w.max(1) - 1) as f64 * s, (field_h.max(1) - 1) as f64 * s);
+        Ok(Self::fit(camera, DVec3::new(0.0, 0.0, lo), DVec3::new(x1, y1, hi), s))
+    }
+
+    /// Builds the model with the near/far planes fitted to the box `min..=max` (world
+    /// coordinates) instead of a field's box; `s` (the texel size) is the smallest extent.
+    /// [`CameraModel::new`] is this for the box `[0, (W−1)s] × [0, (H−1)s] × [lo, hi]`.
+    pub fn with_box(camera: &Camera, min: DVec3, max: DVec3, s: f64) -> Result<Self> {
+        Self::check(camera, s)?;
+        if !(min.is_finite() && max.is_finite() && min.cmple(max).all()) {
+            return Err(Error::param(
+                "view bounding box",
+                format!("{:?}..{:?}", min.to_array(), max.to_array()),
+                "finite min ≤ max",
+            ));
+        }
+        Ok(Self::fit(camera, min, max, s))
+    }
+
+    fn check(camera: &Camera, s: f64) -> Result<()> {
         let finite3 = |v: DVec3| v.is_finite();
         if !finite3(camera.position) || !finite3(camera.target) {
             return Err(Error::param(
@@ -120,9 +148,9 @@ impl CameraModel {
                 "finite points",
             ));
         }
-        let forward = (camera.target - camera.position).try_normalize().ok_or_else(|| {
-            Error::param("camera.target", format!("{:?}", camera.target.to_array()), "≠ camera.position")
-        })?;
+        if (camera.target - camera.position).try_normalize().is_none() {
+            return Err(Error::param("camera.target", format!("{:?}", camera.target.to_array()), "≠ camera.position"));
+        }
         if !(camera.fov_deg > 0.0 && camera.fov_deg < 180.0) {
             return Err(Error::param("camera.fov_deg", camera.fov_deg, "a number in (0, 180) (degrees)"));
         }
@@ -132,33 +160,35 @@ impl CameraModel {
         if !(s.is_finite() && s > 0.0) {
             return Err(Error::param("texel_size", s, "a finite number > 0"));
         }
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(Error::param("height range", format!("{lo}..{hi}"), "finite lo ≤ hi"));
-        }
+        Ok(())
+    }
+
+    /// The model for a checked camera and a finite box.
+    fn fit(camera: &Camera, min: DVec3, max: DVec3, s: f64) -> Self {
+        let forward = (camera.target - camera.position).normalize();
         let mut right = forward.cross(DVec3::Z);
         if right.length() < 1e-9 {
             right = forward.cross(DVec3::Y);
         }
         let right = right.normalize();
         let up = right.cross(forward);
-        let (x1, y1) = ((field_w.max(1) - 1) as f64 * s, (field_h.max(1) - 1) as f64 * s);
         let mut dmin = f64::INFINITY;
         let mut dmax = f64::NEG_INFINITY;
         for c in 0..8 {
             let p = DVec3::new(
-                if c & 1 == 0 { 0.0 } else { x1 },
-                if c & 2 == 0 { 0.0 } else { y1 },
-                if c & 4 == 0 { lo } else { hi },
+                if c & 1 == 0 { min.x } else { max.x },
+                if c & 2 == 0 { min.y } else { max.y },
+                if c & 4 == 0 { min.z } else { max.z },
             );
             let z = (p - camera.position).dot(forward);
             dmin = dmin.min(z);
             dmax = dmax.max(z);
         }
-        let extent = (x1.max(y1) + (hi - lo)).max(s);
+        let extent = ((max.x - min.x).max(max.y - min.y) + (max.z - min.z)).max(s);
         // Margins so that geometry exactly on the box is not clipped by rounding.
         let far = if dmax > 0.0 { dmax * (1.0 + 1e-3) + 1e-6 * extent } else { extent };
         let near = (dmin * (1.0 - 1e-3)).max(far * NEAR_RATIO);
-        Ok(Self {
+        Self {
             eye: camera.position,
             right,
             up,
@@ -169,7 +199,7 @@ impl CameraModel {
             far,
             width: camera.width,
             height: camera.height,
-        })
+        }
     }
 
     /// World → view: x right, y up, looking down −z.
@@ -279,6 +309,157 @@ pub(crate) fn index_bytes(width: usize) -> u64 {
     6 * (width as u64 - 1) * 4
 }
 
+/// Stacks (latitude bands) of the UV sphere drawn per sphere blocker (docs/view.md §6).
+pub const SPHERE_STACKS: u32 = 16;
+/// Slices (longitude bands) of the UV sphere.
+pub const SPHERE_SLICES: u32 = 32;
+/// Vertices per sphere: two triangles per quad, no index buffer.
+pub const SPHERE_VERTICES: u32 = 6 * SPHERE_STACKS * SPHERE_SLICES;
+
+/// Name of the sphere buffer (host-visible, one [`GpuSphere`] per sphere slot).
+pub(crate) const SPHERE_BUFFER: &str = "hfgi.view.spheres";
+/// Name of the sphere lighting buffer (host-visible, [`SphereLighting::bytes`]).
+pub(crate) const SPHERE_LIGHT_BUFFER: &str = "hfgi.view.sphere_light";
+
+/// Whether a sphere blocker is drawn: a finite centre, a finite radius > 0 and a centre not
+/// below `z = −1e9` (the renderer's unused slots hold a dark sphere at `z = −1e10`).
+pub fn sphere_is_live(s: &SphereBlocker) -> bool {
+    s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0 && s.center.z >= -1e9
+}
+
+/// One sphere as the view shaders read it (std430, 48 bytes; `hfgi_ViewSphere` in
+/// glsl/view/sphere.vert.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct GpuSphere {
+    /// Centre, high f32 part (xyz), radius (w).
+    center_radius: [f32; 4],
+    /// Centre, low part: `hi + lo` = the f64 centre.
+    center_lo: [f32; 4],
+    albedo: [f32; 4],
+}
+
+impl GpuSphere {
+    fn new(s: &SphereBlocker) -> Self {
+        let c = s.center.to_array();
+        let hi = c.map(|v| v as f32);
+        let lo = [0, 1, 2].map(|i| (c[i] - f64::from(hi[i])) as f32);
+        let a = s.albedo.map(|v| v as f32);
+        Self {
+            center_radius: [hi[0], hi[1], hi[2], s.radius as f32],
+            center_lo: [lo[0], lo[1], lo[2], 0.0],
+            albedo: [a[0], a[1], a[2], 0.0],
+        }
+    }
+}
+
+/// The lighting of the view's spheres (docs/view.md §6), unshadowed: the environment's
+/// irradiance from its first 9 SH coefficients and each key light as a distant cap.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SphereLighting {
+    /// Irradiance SH coefficients `Â_l · L_lm` (RGB), `k = l(l+1) + m < 9`, with `Â_0 = π`,
+    /// `Â_1 = 2π/3`, `Â_2 = π/4` (missing coefficients are 0).
+    pub env: [[f64; 3]; 9],
+    /// Per key light: the unit direction `d` and `L · 2π(1 − cos α)`, the irradiance on a
+    /// surface facing it (times `max(N·d, 0)` elsewhere).
+    pub key_lights: Vec<(DVec3, [f64; 3])>,
+}
+
+impl SphereLighting {
+    /// The lighting of `environment` (n² RGB SH coefficients, CONVENTIONS.md) and `key_lights`.
+    pub fn new(environment: &Environment, key_lights: &[KeyLight]) -> Self {
+        use std::f64::consts::PI;
+        let mut env = [[0.0; 3]; 9];
+        for (k, c) in environment.sh.iter().take(9).enumerate() {
+            let a = match k {
+                0 => PI,
+                1..=3 => 2.0 * PI / 3.0,
+                _ => PI / 4.0,
+            };
+            env[k] = c.map(|v| a * v);
+        }
+        let key_lights = key_lights
+            .iter()
+            .map(|l| {
+                let solid = 2.0 * PI * (1.0 - l.angular_radius.cos());
+                (l.direction.normalize_or_zero(), l.radiance.map(|v| v * solid))
+            })
+            .collect();
+        Self { env, key_lights }
+    }
+
+    /// Irradiance `E(N)` at unit normal `n` (f64; what the fragment shader evaluates in f32).
+    pub fn irradiance(&self, n: DVec3) -> [f64; 3] {
+        let (x, y, z) = (n.x, n.y, n.z);
+        let b = [
+            0.282_094_791_773_878_1,
+            0.488_602_511_902_919_9 * y,
+            0.488_602_511_902_919_9 * z,
+            0.488_602_511_902_919_9 * x,
+            1.092_548_430_592_079_2 * x * y,
+            1.092_548_430_592_079_2 * y * z,
+            0.315_391_565_252_520_05 * (3.0 * z * z - 1.0),
+            1.092_548_430_592_079_2 * x * z,
+            0.546_274_215_296_039_6 * (x * x - y * y),
+        ];
+        let mut e = [0.0; 3];
+        for (c, bk) in self.env.iter().zip(b) {
+            (0..3).for_each(|i| e[i] += c[i] * bk);
+        }
+        for (d, l) in &self.key_lights {
+            let cos = n.dot(*d).max(0.0);
+            (0..3).for_each(|i| e[i] += l[i] * cos);
+        }
+        e
+    }
+
+    /// The buffer contents (std430, `Light` in glsl/view/sphere.frag.glsl): `uvec4` (x = key
+    /// lights), 9 × `vec4` coefficients, then per key light `vec4` direction and `vec4`
+    /// irradiance.
+    fn bytes(&self) -> Vec<u8> {
+        let mut v: Vec<[f32; 4]> = Vec::with_capacity(10 + 2 * self.key_lights.len());
+        v.push(bytemuck::cast([self.key_lights.len() as u32, 0, 0, 0]));
+        v.extend(self.env.iter().map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0]));
+        for (d, l) in &self.key_lights {
+            v.push([d.x as f32, d.y as f32, d.z as f32, 0.0]);
+            v.push([l[0] as f32, l[1] as f32, l[2] as f32, 0.0]);
+        }
+        bytemuck::cast_slice(&v).to_vec()
+    }
+}
+
+/// Bytes of [`SPHERE_BUFFER`] for `slots` spheres.
+pub(crate) fn sphere_buffer_bytes(slots: usize) -> u64 {
+    (slots.max(1) * std::mem::size_of::<GpuSphere>()) as u64
+}
+
+/// Bytes of [`SPHERE_LIGHT_BUFFER`] for `key_lights` key lights.
+pub(crate) fn sphere_light_bytes(key_lights: usize) -> u64 {
+    (16 * (10 + 2 * key_lights)) as u64
+}
+
+/// The sphere pipeline and its buffers (only while there are or were live spheres).
+struct SphereDraw {
+    pipeline: GraphicsPipeline,
+    set: vk::DescriptorSet,
+    spheres: Buffer,
+    light: Buffer,
+    /// Spheres the buffer holds room for.
+    slots: usize,
+    /// Key lights the lighting buffer holds room for.
+    key_slots: usize,
+    /// Live spheres drawn (instances).
+    count: u32,
+}
+
+impl SphereDraw {
+    fn destroy(mut self, ctx: &Context) {
+        self.pipeline.destroy(ctx);
+        self.spheres.destroy(ctx);
+        self.light.destroy(ctx);
+    }
+}
+
 /// The view-image pass.
 pub struct ViewPass {
     pipeline: GraphicsPipeline,
@@ -297,6 +478,13 @@ pub struct ViewPass {
     model: CameraModel,
     push: ViewPush,
     recorded: Cell<bool>,
+    /// Lighting of the spheres ([`ViewPass::set_sphere_lighting`]).
+    lighting: SphereLighting,
+    /// World box around the live spheres (widens the near/far fit), if any.
+    sphere_box: Option<(DVec3, DVec3)>,
+    /// The live spheres as drawn (host copy of what the sphere buffer holds).
+    sphere_data: Vec<GpuSphere>,
+    spheres: Option<SphereDraw>,
 }
 
 impl ViewPass {
@@ -429,20 +617,197 @@ impl ViewPass {
             model,
             push: ViewPush::default(),
             recorded: Cell::new(false),
+            lighting: SphereLighting::default(),
+            sphere_box: None,
+            sphere_data: Vec::new(),
+            spheres: None,
         };
         me.update_push();
         Ok(me)
     }
 
     /// [`ViewPass::new`] for a renderer's scene: its field size, texel size, camera and height
-    /// range, reading [`Renderer::heights_buffer`] and [`Renderer::shading_buffer`].
+    /// range, reading [`Renderer::heights_buffer`] and [`Renderer::shading_buffer`]. With live
+    /// spheres in [`Renderer::live_scene`], also the sphere pipeline and buffers, lit by the
+    /// live scene's environment and key lights ([`ViewPass::set_sphere_lighting`],
+    /// [`ViewPass::set_spheres`]).
+    ///
+    /// [`Renderer::live_scene`]: super::Renderer::live_scene
     pub fn for_renderer(ctx: &Context, scene: &Scene, renderer: &Renderer, opts: &ViewOptions) -> Result<Self> {
         let inputs = ViewInputs {
             heights: renderer.heights_buffer(),
             shading: renderer.shading_buffer(),
             height_range: scene.field.range(),
         };
-        Self::new(ctx, scene.field.width(), scene.field.height(), &scene.camera, scene.texel_size, &inputs, opts)
+        let mut me =
+            Self::new(ctx, scene.field.width(), scene.field.height(), &scene.camera, scene.texel_size, &inputs, opts)?;
+        let live = renderer.live_scene();
+        me.lighting = SphereLighting::new(&live.environment, &live.key_lights);
+        if let Err(e) = me.set_spheres(ctx, &live.spheres) {
+            me.destroy(ctx);
+            return Err(e);
+        }
+        Ok(me)
+    }
+
+    /// The camera model for `camera` and `height_range`, its near/far planes fitted to the
+    /// field's box and, with live spheres, their box too.
+    fn fit_model(
+        &self,
+        camera: &Camera,
+        height_range: (f32, f32),
+        sphere_box: Option<(DVec3, DVec3)>,
+    ) -> Result<CameraModel> {
+        let (w, h, s) = (self.field.0, self.field.1, self.texel_size);
+        let (lo, hi) = (f64::from(height_range.0), f64::from(height_range.1));
+        let Some((smin, smax)) = sphere_box else {
+            return CameraModel::new(camera, w, h, s, lo, hi);
+        };
+        let field = CameraModel::new(camera, w, h, s, lo, hi)?;
+        let (x1, y1) = ((w.max(1) - 1) as f64 * s, (h.max(1) - 1) as f64 * s);
+        let mut model =
+            CameraModel::with_box(camera, DVec3::new(0.0, 0.0, lo).min(smin), DVec3::new(x1, y1, hi).max(smax), s)?;
+        // A sphere far away pushes the far plane out and, through NEAR_RATIO, the near plane:
+        // never past the field's own near plane, so that spheres cannot clip the field.
+        model.near = model.near.min(field.near);
+        Ok(model)
+    }
+
+    /// Sets the spheres drawn with the height field (docs/view.md §6): the live ones
+    /// ([`sphere_is_live`]) of `spheres`, e.g. [`Renderer::live_scene`]`.spheres` after
+    /// [`Renderer::set_spheres`]. Writes the host-visible sphere buffer now (no submit), so call
+    /// it between frames: the GPU must not be executing a recorded frame of this pass (as after
+    /// waiting for the frame's fence). The first live spheres create the sphere pipeline and its
+    /// buffers, with room for `spheres.len()` spheres; more spheres later wait for the device to
+    /// go idle and recreate them. Takes effect at the next [`ViewPass::record`]; the near/far
+    /// planes are refitted to include the spheres.
+    ///
+    /// [`Renderer::live_scene`]: super::Renderer::live_scene
+    /// [`Renderer::set_spheres`]: super::Renderer::set_spheres
+    pub fn set_spheres(&mut self, ctx: &Context, spheres: &[SphereBlocker]) -> Result<()> {
+        let live: Vec<&SphereBlocker> = spheres.iter().filter(|s| sphere_is_live(s)).collect();
+        if let Some(k) = live.iter().position(|s| !s.albedo.iter().all(|a| a.is_finite())) {
+            return Err(Error::param(format!("sphere {k} albedo"), format!("{:?}", live[k].albedo), "finite"));
+        }
+        let sphere_box = live.iter().fold(None, |acc: Option<(DVec3, DVec3)>, s| {
+            let (a, b) = (s.center - DVec3::splat(s.radius), s.center + DVec3::splat(s.radius));
+            Some(acc.map_or((a, b), |(lo, hi)| (lo.min(a), hi.max(b))))
+        });
+        let model = self.fit_model(&self.camera, self.height_range, sphere_box)?;
+        if !live.is_empty() {
+            self.ensure_spheres(ctx, spheres.len().max(live.len()), self.lighting.key_lights.len())?;
+        }
+        self.sphere_data = live.iter().map(|s| GpuSphere::new(s)).collect();
+        self.write_buffers()?;
+        self.sphere_box = sphere_box;
+        self.model = model;
+        self.update_push();
+        Ok(())
+    }
+
+    /// Sets the lighting of the spheres (environment SH and key lights, docs/view.md §6;
+    /// [`ViewPass::for_renderer`] takes the renderer's, [`ViewPass::new`] starts with none, i.e.
+    /// black spheres). Writes the host-visible lighting buffer now if the sphere objects exist
+    /// (the same rule as [`ViewPass::set_spheres`]: between frames).
+    pub fn set_sphere_lighting(
+        &mut self,
+        ctx: &Context,
+        environment: &Environment,
+        key_lights: &[KeyLight],
+    ) -> Result<()> {
+        self.lighting = SphereLighting::new(environment, key_lights);
+        if let Some(slots) = self.spheres.as_ref().map(|d| d.slots) {
+            self.ensure_spheres(ctx, slots, self.lighting.key_lights.len())?;
+        }
+        self.write_buffers()
+    }
+
+    /// The lighting the spheres are drawn with.
+    pub fn sphere_lighting(&self) -> &SphereLighting {
+        &self.lighting
+    }
+
+    /// Live spheres the next frame draws (0 without sphere objects).
+    pub fn sphere_count(&self) -> u32 {
+        self.spheres.as_ref().map_or(0, |d| d.count)
+    }
+
+    /// Writes the host copies of the spheres and the lighting into the sphere objects (if any).
+    fn write_buffers(&mut self) -> Result<()> {
+        if let Some(d) = self.spheres.as_mut() {
+            let bytes = self.lighting.bytes();
+            d.light.mapped()?[..bytes.len()].copy_from_slice(&bytes);
+            let bytes: &[u8] = bytemuck::cast_slice(&self.sphere_data);
+            d.spheres.mapped()?[..bytes.len()].copy_from_slice(bytes);
+            d.count = self.sphere_data.len() as u32;
+        }
+        Ok(())
+    }
+
+    /// Makes sure the sphere objects exist with room for `slots` spheres and `keys` key
+    /// lights (recreating them after a device wait if they are smaller). New objects are
+    /// written from the host copies ([`ViewPass::write_buffers`]).
+    fn ensure_spheres(&mut self, ctx: &Context, slots: usize, keys: usize) -> Result<()> {
+        if let Some(d) = &self.spheres {
+            if d.slots >= slots && d.key_slots >= keys {
+                return Ok(());
+            }
+        }
+        let (slots, keys) = match &self.spheres {
+            Some(d) => (slots.max(d.slots), keys.max(d.key_slots)),
+            None => (slots, keys),
+        };
+        if let Some(old) = self.spheres.take() {
+            // The old objects may still be read by a submitted frame.
+            unsafe { ctx.device().device_wait_idle() }
+                .map_err(|e| Error::Vulkan { call: "vkDeviceWaitIdle", result: e })?;
+            old.destroy(ctx);
+        }
+        let extent = vk::Extent2D { width: self.camera.width, height: self.camera.height };
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let spheres = Buffer::new(ctx, SPHERE_BUFFER, sphere_buffer_bytes(slots), usage, MemoryLocation::CpuToGpu)?;
+        let light =
+            match Buffer::new(ctx, SPHERE_LIGHT_BUFFER, sphere_light_bytes(keys), usage, MemoryLocation::CpuToGpu) {
+                Ok(b) => b,
+                Err(e) => {
+                    spheres.destroy(ctx);
+                    return Err(e);
+                }
+            };
+        let made = GraphicsPipeline::new(
+            ctx,
+            &GraphicsDesc {
+                name: "view/spheres",
+                vertex: &shaders::VIEW_SPHERE_VERT,
+                fragment: &shaders::VIEW_SPHERE_FRAG,
+                kinds: &[DescriptorKind::StorageBuffer; 2],
+                push_size: std::mem::size_of::<ViewPush>() as u32,
+                color_format: self.choice.color_format,
+                depth_format: Some(self.choice.depth_format),
+                depth_compare: vk::CompareOp::GREATER,
+                samples: vk::SampleCountFlags::from_raw(self.choice.samples),
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                extent,
+                max_sets: 1,
+            },
+        )
+        .and_then(|mut p| match p.allocate_set(ctx, &[Bind::Buffer(&spheres), Bind::Buffer(&light)]) {
+            Ok(set) => Ok((p, set)),
+            Err(e) => {
+                p.destroy(ctx);
+                Err(e)
+            }
+        });
+        let (pipeline, set) = match made {
+            Ok(v) => v,
+            Err(e) => {
+                spheres.destroy(ctx);
+                light.destroy(ctx);
+                return Err(e);
+            }
+        };
+        self.spheres = Some(SphereDraw { pipeline, set, spheres, light, slots, key_slots: keys, count: 0 });
+        self.write_buffers()
     }
 
     fn update_push(&mut self) {
@@ -474,9 +839,7 @@ impl ViewPass {
                 ),
             ));
         }
-        let (lo, hi) = self.height_range;
-        self.model =
-            CameraModel::new(camera, self.field.0, self.field.1, self.texel_size, f64::from(lo), f64::from(hi))?;
+        self.model = self.fit_model(camera, self.height_range, self.sphere_box)?;
         self.camera = camera.clone();
         self.update_push();
         Ok(())
@@ -485,8 +848,7 @@ impl ViewPass {
     /// Sets the height range that bounds the near/far planes (call when animated heights leave
     /// the range given at creation). Takes effect at the next [`ViewPass::record`].
     pub fn set_height_range(&mut self, lo: f32, hi: f32) -> Result<()> {
-        self.model =
-            CameraModel::new(&self.camera, self.field.0, self.field.1, self.texel_size, f64::from(lo), f64::from(hi))?;
+        self.model = self.fit_model(&self.camera, (lo, hi), self.sphere_box)?;
         self.height_range = (lo, hi);
         self.update_push();
         Ok(())
@@ -549,6 +911,22 @@ impl ViewPass {
                 self.index_count,
                 self.instances,
             );
+            if let Some(d) = self.spheres.as_ref().filter(|d| d.count > 0) {
+                let dev = ctx.device();
+                unsafe {
+                    dev.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, d.pipeline.pipeline);
+                    dev.cmd_bind_descriptor_sets(
+                        cmd,
+                        vk::PipelineBindPoint::GRAPHICS,
+                        d.pipeline.layout,
+                        0,
+                        &[d.set],
+                        &[],
+                    );
+                    dev.cmd_push_constants(cmd, d.pipeline.layout, GRAPHICS_STAGES, 0, bytemuck::bytes_of(&self.push));
+                    dev.cmd_draw(cmd, SPHERE_VERTICES, d.count, 0, 0);
+                }
+            }
             graphics::end_rendering(ctx, cmd);
             barrier::image_transitions(
                 ctx,
@@ -633,15 +1011,20 @@ impl ViewPass {
         &self.model
     }
 
-    /// GPU memory held by the pass's images and index buffer, in bytes.
+    /// GPU memory held by the pass's images, index buffer and (with spheres) sphere buffers, in
+    /// bytes.
     pub fn memory_bytes(&self) -> u64 {
         self.output.size_bytes()
             + self.depth.size_bytes()
             + self.msaa.as_ref().map(|m| m.size_bytes()).unwrap_or(0)
             + self.index.size
+            + self.spheres.as_ref().map_or(0, |d| d.spheres.size + d.light.size)
     }
 
     pub fn destroy(mut self, ctx: &Context) {
+        if let Some(d) = self.spheres.take() {
+            d.destroy(ctx);
+        }
         self.pipeline.destroy(ctx);
         self.index.destroy(ctx);
         if let Some(m) = self.msaa.take() {

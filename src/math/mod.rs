@@ -12,6 +12,7 @@ pub mod legendre;
 pub mod nlp;
 pub mod quadrature;
 pub mod sh;
+pub mod shexp;
 pub mod triple;
 pub mod wedge;
 pub mod zh;

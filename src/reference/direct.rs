@@ -35,6 +35,9 @@ pub struct DirectOutput {
     /// Incident SH radiance `T = Σ L ⊛ V` at every texel (`n²` RGB), the glossy vector
     /// pyramid's input (docs/indirect.md §1).
     pub incident: Vec<Vec<[f64; 3]>>,
+    /// The sphere blockers' visibility `V_s` per receiver (scenes with spheres;
+    /// [`super::blockers`]): each bounce's incident radiance is multiplied by it too.
+    pub blockers: Option<Vec<Vec<f64>>>,
 }
 
 /// Scan parameters shared by every receiver (docs/direct.md §2, docs/accuracy.md §4).
@@ -386,6 +389,13 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     let t = triple::triple(n);
     let normals = normals(scene);
     let lobes = Lobes::new(scene);
+    // Sphere blockers (docs/blockers.md): V_s per receiver, and in log mode the environment's
+    // combined visibility, which replaces its V (the environment is set 0).
+    let blockers = (!scene.spheres.is_empty()).then(|| {
+        let env = (sets.first().map(|s| s.0) == Some(SetKind::Environment)).then(|| visibility[0].as_slice());
+        super::blockers::blocker_visibility(scene, work, &normals, env)
+    });
+    let albedo = blockers.as_ref().and_then(|b| b.transfer.as_ref()).map(|_| super::truth::albedo(scene));
     let mut direct = Vec::with_capacity(w * h);
     let mut glossy = Vec::with_capacity(w * h);
     let mut incident = Vec::with_capacity(w * h);
@@ -394,16 +404,35 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
             let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
             // Incident radiance T = Σ_sets L ⊛ V (§6), V interpolated from the receiver grid.
             let mut tr = vec![[0.0f64; 3]; n * n];
-            for (vis, light) in visibility.iter().zip(&lighting) {
-                let v = interpolate(vis, work, xw, yw, scene.wrap);
+            let mut tr_env = vec![[0.0f64; 3]; n * n];
+            for (si, (vis, light)) in visibility.iter().zip(&lighting).enumerate() {
+                let combined = blockers.as_ref().and_then(|b| b.environment.as_ref()).filter(|_| si == 0);
+                let v = interpolate(combined.unwrap_or(vis), work, xw, yw, scene.wrap);
+                let into = if combined.is_some() { &mut tr_env } else { &mut tr };
                 for ch in 0..3 {
                     let l: Vec<f64> = light.iter().map(|c| c[ch]).collect();
                     for (k, val) in triple::product(&t, &l, &v).into_iter().enumerate() {
-                        tr[k][ch] += val;
+                        into[k][ch] += val;
                     }
                 }
             }
-            let (d, g) = lobes.shade(scene, x, y, normals[y * w + x], &tr);
+            if let Some(b) = &blockers {
+                let vs = interpolate(&b.spheres, work, xw, yw, scene.wrap);
+                tr = super::blockers::times(&t, &tr, &vs);
+                tr.iter_mut().zip(&tr_env).for_each(|(a, e)| *a = [a[0] + e[0], a[1] + e[1], a[2] + e[2]]);
+            }
+            let (mut d, g) = lobes.shade(scene, x, y, normals[y * w + x], &tr);
+            if let Some(t3) = blockers.as_ref().and_then(|b| b.transfer.as_ref()) {
+                // log_brdf: the environment's diffuse term from its transfer (seed 001 §5):
+                // ρ/π·(π⟨L_env, T_ρ⟩ − ⟨L_env ⊛ V', cc_N⟩).
+                let t3 = interpolate(t3, work, xw, yw, scene.wrap);
+                let cc = zh::rotate(n, &zh::clamped_cosine(n), normals[y * w + x]);
+                let rho = albedo.as_ref().map_or([0.0; 3], |a| a[y * w + x]);
+                for ch in 0..3 {
+                    let e: f64 = (0..n * n).map(|k| PI * lighting[0][k][ch] * t3[k] - tr_env[k][ch] * cc[k]).sum();
+                    d[ch] += rho[ch] / PI * e;
+                }
+            }
             direct.push(d);
             glossy.push(g);
             incident.push(tr);
@@ -425,5 +454,6 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
         kinds: sets.iter().map(|s| s.0).collect(),
         normals,
         incident,
+        blockers: blockers.map(|b| b.spheres),
     })
 }

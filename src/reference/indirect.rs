@@ -194,6 +194,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
     let lobes = Lobes::new(scene);
     let nrm = normals(scene);
+    let tri = crate::math::triple::triple(n);
     let n_v = pyr.layout.count();
     let big_n = w.max(h) as f64;
 
@@ -261,7 +262,11 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
             for x in 0..w {
                 let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
                 let uc: Vec<Vec<f64>> = channels.iter().map(|c| interpolate(c, work, xw, yw, scene.wrap)).collect();
-                let tr: Vec<[f64; 3]> = (0..n * n).map(|k| [uc[0][k], uc[1][k], uc[2][k]]).collect();
+                let mut tr: Vec<[f64; 3]> = (0..n * n).map(|k| [uc[0][k], uc[1][k], uc[2][k]]).collect();
+                if let Some(b) = &direct.blockers {
+                    // The sphere blockers shade the bounce light too (docs/blockers.md §4).
+                    tr = super::blockers::times(&tri, &tr, &interpolate(b, work, xw, yw, scene.wrap));
+                }
                 let (d, g) = lobes.shade(scene, x, y, nrm[y * w + x], &tr);
                 diffuse.push(d);
                 glossy.push(g);

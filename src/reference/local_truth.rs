@@ -26,6 +26,12 @@
 //! toward `c` (toward +z when `d = 0`) — and the sphere entry distance is 0: no terrain blocks
 //! any of its directions. Directions below the receiver's tangent plane never count.
 //!
+//! Sphere blockers ([`SphereCaps`]; CONVENTIONS.md "Accuracy": a direction sees a local light
+//! iff its ray reaches the light sphere before the height field or a blocker): node by node,
+//! above the horizon as below it, a node is dropped when its ray enters a blocker before the
+//! light, `τ_blocker < τ_light` (3D distances; `τ_light = 0` for a receiver inside the light,
+//! which no blocker can then hide). A receiver inside a blocker sees no local light.
+//!
 //! The result is the irradiance `E = Σ_lights L ∫ visible max(N·ω, 0) dω` (RGB); the reference
 //! adds `ρ/π · E` to the direct exit radiance of both variants, before the bounces take it
 //! as their source. The SH-visibility variant includes local lights exactly like this: their
@@ -35,10 +41,10 @@ use std::f64::consts::FRAC_PI_2;
 
 use glam::DVec3;
 
-use super::cap::{cap_azimuths_toward, cap_window};
+use super::cap::{cap_azimuths_toward, cap_window, SphereCaps};
 use super::ray::{first_hits, Surface};
 use super::truth::{direction, nodes_on, tangent_elevation, Profile, TruthSettings};
-use crate::scene::model::LocalLight;
+use crate::scene::model::{LocalLight, SphereBlocker};
 
 /// The cap a local light subtends from one receiver.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,12 +77,18 @@ impl LocalCap {
     /// Planar distance (texels, texel size `s`) from the receiver to where the ray along unit
     /// `u` (elevation cosine `cos_om`) enters the sphere; 0 inside.
     pub fn entry(&self, u: DVec3, cos_om: f64, s: f64) -> f64 {
+        self.reach(u) * cos_om / s
+    }
+
+    /// Distance (world units) along unit `u` (a direction of the cap) to where the ray enters
+    /// the sphere; 0 inside.
+    pub fn reach(&self, u: DVec3) -> f64 {
         if self.inside {
             return 0.0;
         }
         let b = u.dot(self.rel);
         let disc = (b * b - self.q).max(0.0);
-        self.q / (b + disc.sqrt()) * cos_om / s
+        self.q / (b + disc.sqrt())
     }
 }
 
@@ -90,6 +102,8 @@ pub struct LocalTruth<'a> {
     pub nrm: &'a [[f64; 3]],
     /// Gauss–Legendre nodes and weights on `[−1, 1]` (`settings.nodes`).
     pub gauss: &'a (Vec<f64>, Vec<f64>),
+    /// The scene's sphere blockers.
+    pub spheres: &'a [SphereBlocker],
 }
 
 impl LocalTruth<'_> {
@@ -110,12 +124,27 @@ impl LocalTruth<'_> {
         let (surf, s) = (&self.surf, self.texel_size);
         let k = j * surf.width + i;
         let p = DVec3::new(i as f64 * s, j as f64 * s, surf.heights[k]);
+        let spheres = SphereCaps::new(self.spheres, p);
+        if spheres.inside {
+            return 0.0;
+        }
         let cap = LocalCap::new(light, p);
         let (nrm, nv) = (self.nrm[k], DVec3::from_array(self.nrm[k]));
         let l = cap.l.to_array();
-        // ∫ over [a, b] of (N·ω) cos ω, every node visible.
+        // The ray along u enters a blocker before the light.
+        let hidden = |u: DVec3| spheres.hit(u) < cap.reach(u);
+        // ∫ over [a, b] of (N·ω) cos ω, every node that no blocker hides.
         let open = |phi: f64, a: f64, b: f64| -> f64 {
-            nodes_on(self.gauss, a, b).map(|(om, wt)| wt * om.cos() * nv.dot(direction(om, phi)).max(0.0)).sum()
+            nodes_on(self.gauss, a, b)
+                .map(|(om, wt)| {
+                    let u = direction(om, phi);
+                    if hidden(u) {
+                        0.0
+                    } else {
+                        wt * om.cos() * nv.dot(u).max(0.0)
+                    }
+                })
+                .sum()
         };
         let mut sum = 0.0;
         for (phi, wphi) in cap_azimuths_toward(cap.l, cap.sin_a, self.settings.azimuths, self.settings.cap_nodes) {
@@ -150,7 +179,7 @@ impl LocalTruth<'_> {
                 let t_hit = hit_distances(&prof, &omegas, s, i, j);
                 for (e, &(om, wt)) in nodes.iter().enumerate() {
                     let u = direction(om, phi);
-                    if t_hit.get(e).map_or(true, |&t| t > cap.entry(u, om.cos(), s)) {
+                    if t_hit.get(e).map_or(true, |&t| t > cap.entry(u, om.cos(), s)) && !hidden(u) {
                         sum += wphi * wt * om.cos() * nv.dot(u).max(0.0);
                     }
                 }

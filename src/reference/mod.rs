@@ -1,5 +1,6 @@
 //! CPU (f64) twins of the GPU stages, same algorithm and parameters, used by the tests.
 
+pub mod blockers;
 pub mod cap;
 pub mod direct;
 pub mod indirect;

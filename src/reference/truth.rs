@@ -18,7 +18,17 @@
 //!   caps' SH projections ([`lighting_sh`]);
 //! - local lights, both variants: the true sphere ([`super::local_truth`]: a direction sees it
 //!   iff its ray reaches the sphere before the height field), `ρ/π · E` added to the direct
-//!   exit radiance, which the bounces then take as their source.
+//!   exit radiance, which the bounces then take as their source;
+//! - sphere blockers (CONVENTIONS.md "Lighting"; [`super::cap::SphereCaps`]): opaque, they
+//!   block every ray that meets them and do not reflect. Direct: on each half-plane a sphere
+//!   blocks exactly its cap's elevation window; the environment over the open interval of
+//!   the uniform azimuths minus, per sphere `k`, its blocked part `(W_k ∩ open) ∖ ∪_{j<k} W_j`
+//!   integrated over the sphere's own azimuth samples (like a key light's cap, so that the
+//!   chord ends are integrated exactly); a key light's window minus every sphere's window on
+//!   its samples ([`super::cap::gaps`]: exact sub-intervals, `nodes` points each); a local
+//!   light's node is blocked if its ray enters a sphere before the light. Bounces: a node
+//!   whose ray enters a sphere before its first hit carries zero. A receiver inside a
+//!   sphere gets nothing (direct and indirect).
 //!
 //! Two variants: *exact* (`L_o = ρ/π ∫ L_in max(N·ω, 0) dω`) and *SH-visibility* (exact
 //! visibility and indirect radiance projected to order n, then shaded as the pipeline does:
@@ -29,7 +39,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use glam::DVec3;
 
-use super::cap::{cap_azimuths, cap_window};
+use super::cap::{cap_azimuths, cap_azimuths_toward, cap_window, gaps, SphereCaps};
 use super::direct::normals;
 use super::local_truth::LocalTruth;
 pub use super::ray::bilinear;
@@ -296,9 +306,25 @@ impl Setup<'_> {
         }
     }
 
+    /// The sphere blockers seen from the receiver of texel `(i, j)`.
+    fn sphere_caps(&self, i: usize, j: usize) -> SphereCaps {
+        let (w, s) = (self.scene.field.width(), self.scene.texel_size);
+        SphereCaps::new(&self.scene.spheres, DVec3::new(i as f64 * s, j as f64 * s, self.heights[j * w + i]))
+    }
+
+    /// What [`Self::per_texel`] returns for a receiver that sees nothing (inside a sphere).
+    fn nothing(&self) -> Vec<[f64; 3]> {
+        let n = self.scene.gi.sh_order;
+        vec![[0.0; 3]; if self.settings.sh_visibility { n * n } else { 1 }]
+    }
+
     /// Direct light of texel `(i, j)`: `E` (exact) or `V_k` in `.0` (SH-visibility).
     fn direct(&self, i: usize, j: usize) -> Vec<[f64; 3]> {
         let s = self.scene.texel_size;
+        let spheres = self.sphere_caps(i, j);
+        if spheres.inside {
+            return self.nothing();
+        }
         let mut out = self.per_texel(i, j, |acc, phi, prof| {
             let hor = prof.horizon(s);
             if self.settings.sh_visibility {
@@ -320,9 +346,12 @@ impl Setup<'_> {
                 }
             }
         });
+        if !spheres.caps.is_empty() {
+            self.sphere_parts(&spheres, i, j, &mut out);
+        }
         if !self.settings.sh_visibility {
             for (key, samples) in &self.caps {
-                let c = self.cap(key, samples, i, j);
+                let c = self.cap(key, samples, i, j, &spheres);
                 for (ec, r) in out[0].iter_mut().zip(&key.radiance) {
                     *ec += c * r;
                 }
@@ -331,8 +360,48 @@ impl Setup<'_> {
         out
     }
 
-    /// `∫_cap∩open max(N·ω, 0) dω` at texel `(i, j)` over the cap's azimuth samples.
-    fn cap(&self, key: &KeyLight, samples: &[(f64, f64)], i: usize, j: usize) -> f64 {
+    /// Removes from the direct integral `out` (as [`Self::direct`] forms it) what the spheres
+    /// block: per sphere `k`, over its own azimuth samples, the environment (exact: `L·(N·ω)⁺`;
+    /// SH-visibility: `y_k`) on `(W_k ∩ open) ∖ ∪_{j<k} W_j`, so that overlaps count once.
+    fn sphere_parts(&self, spheres: &SphereCaps, i: usize, j: usize, out: &mut [[f64; 3]]) {
+        let (surf, s, sh) = (self.surface(), self.scene.texel_size, self.settings.sh_visibility);
+        let p = j * surf.width + i;
+        let nv = DVec3::from_array(self.nrm[p]);
+        let mut basis = ShBasis::new(self.scene.gi.sh_order);
+        for (k, cap) in spheres.caps.iter().enumerate() {
+            for (phi, wphi) in cap_azimuths_toward(cap.l, cap.sin_a, self.settings.azimuths, self.settings.cap_nodes) {
+                let d = [phi.cos(), phi.sin()];
+                let Some((w0, w1)) = cap.window(d) else { continue };
+                let hor = Profile::trace(&surf, i, j, phi, self.settings).horizon(s);
+                let lo = if sh { hor } else { hor.max(tangent_elevation(self.nrm[p], phi)) };
+                let (a, b) = (w0.max(lo), w1.min(FRAC_PI_2));
+                if b <= a {
+                    continue;
+                }
+                let earlier: Vec<Option<(f64, f64)>> = spheres.caps[..k].iter().map(|c| c.window(d)).collect();
+                gaps(a, b, &earlier, |x, y| {
+                    for (om, wt) in nodes_on(&self.gauss, x, y) {
+                        let dir = direction(om, phi);
+                        let yv = basis.eval(dir.to_array());
+                        if sh {
+                            for (v, yk) in out.iter_mut().zip(yv) {
+                                v[0] -= wphi * wt * om.cos() * yk;
+                            }
+                        } else {
+                            let cosf = nv.dot(dir).max(0.0) * om.cos() * wt * wphi;
+                            for (ch, ec) in out[0].iter_mut().enumerate() {
+                                *ec -= cosf * self.light.iter().zip(yv).map(|(l, yk)| l[ch] * yk).sum::<f64>();
+                            }
+                        }
+                    }
+                });
+            }
+        }
+    }
+
+    /// `∫_cap∩open max(N·ω, 0) dω` at texel `(i, j)` over the cap's azimuth samples, the
+    /// spheres' windows taken out of it.
+    fn cap(&self, key: &KeyLight, samples: &[(f64, f64)], i: usize, j: usize, spheres: &SphereCaps) -> f64 {
         let (surf, s) = (self.surface(), self.scene.texel_size);
         let p = j * surf.width + i;
         let nv = DVec3::from_array(self.nrm[p]);
@@ -344,18 +413,25 @@ impl Setup<'_> {
             let hor = Profile::trace(&surf, i, j, phi, self.settings).horizon(s);
             let (lo, hi) = (w0.max(hor).max(tangent_elevation(self.nrm[p], phi)), w1.min(FRAC_PI_2));
             if hi > lo {
-                for (om, wt) in nodes_on(&self.gauss, lo, hi) {
-                    sum += wphi * wt * om.cos() * nv.dot(direction(om, phi)).max(0.0);
-                }
+                gaps(lo, hi, &spheres.windows([phi.cos(), phi.sin()]), |a, b| {
+                    for (om, wt) in nodes_on(&self.gauss, a, b) {
+                        sum += wphi * wt * om.cos() * nv.dot(direction(om, phi)).max(0.0);
+                    }
+                });
             }
         }
         sum
     }
 
     /// One bounce at texel `(i, j)` from the previous bounce's exit radiance `chans` (per
-    /// channel): `E` (exact) or `U_k` (SH-visibility).
+    /// channel): `E` (exact) or `U_k` (SH-visibility). A node whose ray enters a sphere before
+    /// its first hit carries nothing (spheres absorb).
     fn bounce(&self, chans: &[Vec<f64>], i: usize, j: usize) -> Vec<[f64; 3]> {
         let (surf, s) = (self.surface(), self.scene.texel_size);
+        let spheres = self.sphere_caps(i, j);
+        if spheres.inside {
+            return self.nothing();
+        }
         self.per_texel(i, j, |acc, phi, prof| {
             let (hor, lo) = (prof.horizon(s), tangent_elevation(acc.normal.to_array(), phi));
             if hor <= lo {
@@ -364,6 +440,13 @@ impl Setup<'_> {
             let nodes: Vec<(f64, f64)> = nodes_on(&self.gauss, lo, hor).collect();
             let omegas: Vec<f64> = nodes.iter().map(|v| v.0).collect();
             for ((om, wt), q) in nodes.iter().zip(prof.hits(&omegas, s)) {
+                if !spheres.caps.is_empty() {
+                    // Planar distances in texels: the sphere entry's, the first hit's.
+                    let t_sphere = spheres.hit(direction(*om, phi)) * om.cos() / s;
+                    if t_sphere < (q[0] - i as f64).hypot(q[1] - j as f64) {
+                        continue;
+                    }
+                }
                 let r: Vec<f64> =
                     chans.iter().map(|c| bilinear(c, surf.width, surf.height, q[0], q[1], surf.wrap)).collect();
                 let d = direction(*om, phi);
@@ -441,6 +524,7 @@ pub fn render_truth(
             texel_size: scene.texel_size,
             nrm: &setup.nrm,
             gauss: &setup.gauss,
+            spheres: &scene.spheres,
         };
         for (p, out) in direct.iter_mut().enumerate() {
             let e = local.irradiance(p % w, p / w);

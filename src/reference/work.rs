@@ -21,7 +21,8 @@ pub struct TruthWork {
     pub receivers: f64,
     /// Rays per receiver and pass: the uniform azimuths plus each key light's cap azimuths
     /// plus, per local light, `max(azimuths, cap_nodes)` (its cap's samples: `cap_nodes`, or
-    /// the uniform azimuths where it holds a pole; both variants).
+    /// the uniform azimuths where it holds a pole; both variants) plus, per sphere blocker, as
+    /// many (its cap's samples, a ray each, in the direct pass of both variants).
     pub rays: f64,
     /// Passes: the direct light and each bounce.
     pub passes: f64,
@@ -46,10 +47,12 @@ impl TruthSettings {
         let reach = if scene.wrap { w.max(h) } else { w.hypot(h) };
         let steps_per_ray = if self.march { reach / self.step } else { reach * std::f64::consts::SQRT_2 };
         let caps = if self.sh_visibility { 0.0 } else { scene.key_lights.len() as f64 * f64::from(self.cap_nodes) };
-        let locals = scene.local_lights.len() as f64 * f64::from(self.azimuths.max(self.cap_nodes));
+        let per_cap = f64::from(self.azimuths.max(self.cap_nodes));
+        let locals = scene.local_lights.len() as f64 * per_cap;
+        let spheres = scene.spheres.len() as f64 * per_cap;
         TruthWork {
             receivers: w * h,
-            rays: f64::from(self.azimuths) + caps + locals,
+            rays: f64::from(self.azimuths) + caps + locals + spheres,
             passes: 1.0 + f64::from(scene.gi.bounces),
             steps_per_ray,
         }
@@ -146,6 +149,22 @@ mod tests {
         // max(256 azimuths, 64 cap nodes) per local light, in both variants.
         assert_eq!(with - settings.work(&scene).rays, 256.0);
         assert_eq!(with_shv - shv.work(&scene).rays, 256.0);
+    }
+
+    #[test]
+    fn spheres_count_in_the_work() {
+        let mut scene = crate::scene::file::parse_scene(
+            "[[sphere]]\ncenter = [4.0, 4.0, 3.0]\nradius = 1.0\n[[sphere]]\ncenter = [9.0, 4.0, 3.0]\nradius = 2.0\n",
+            std::path::Path::new("."),
+            "t",
+            &["heightfield.size=32".into()],
+        )
+        .unwrap();
+        let settings = TruthSettings::default();
+        let with = settings.work(&scene).rays;
+        scene.spheres.clear();
+        // max(256 azimuths, 64 cap nodes) per sphere.
+        assert_eq!(with - settings.work(&scene).rays, 512.0);
     }
 
     #[test]

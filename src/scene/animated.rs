@@ -44,16 +44,19 @@ pub enum Animation {
     /// A day: the sun moves, the sky follows, the camera orbits; the heights stay
     /// (`crate::scene::day`).
     Day(crate::scene::day::DayParams),
+    /// The scene's spheres roll over the terrain (`crate::scene::boulders`); the heights stay.
+    Boulders(crate::scene::boulders::BoulderParams),
 }
 
 impl Animation {
-    /// `none`, `water`, `bumps` or `day` (the `animation.kind` value).
+    /// `none`, `water`, `bumps`, `day` or `boulders` (the `animation.kind` value).
     pub fn kind(&self) -> &'static str {
         match self {
             Animation::None => "none",
             Animation::Water(_) => "water",
             Animation::Bumps(_) => "bumps",
             Animation::Day(_) => "day",
+            Animation::Boulders(_) => "boulders",
         }
     }
 }

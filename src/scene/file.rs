@@ -39,7 +39,7 @@ use crate::scene::load::{load_heightfield_meta, LoadOptions};
 use crate::scene::model::limits;
 use crate::scene::model::{
     Albedo, Camera, Environment, GiSettings, GlossyPyramid, Interpolation, KeyLight, LocalLight, Material, PyramidMode,
-    Quality, Scene,
+    Quality, Scene, SphereBlocker,
 };
 use crate::scene::HeightField;
 
@@ -198,12 +198,25 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let environment = ctx.environment(raw.environment.as_ref())?;
     let key_lights = ctx.key_lights(raw.key_light.as_deref().unwrap_or(&[]))?;
     let local_lights = ctx.local_lights(raw.local_light.as_deref().unwrap_or(&[]), texel_size)?;
+    let spheres = ctx.spheres(raw.sphere.as_deref().unwrap_or(&[]), texel_size)?;
     let gi = ctx.gi(raw.gi.as_ref())?;
     let camera = ctx.camera(raw.camera.as_ref(), &field, texel_size)?;
     let animation = ctx.animation(raw.animation.as_ref(), wrap)?;
     crate::scene::model::check_sweep(wrap, &gi).map_err(|e| ctx.wrap("gi.visibility", e))?;
     crate::scene::model::check_local_wrap(wrap, local_lights.len()).map_err(|e| ctx.wrap("local_light", e))?;
-    Ok(Scene { field, texel_size, wrap, material, environment, key_lights, local_lights, gi, camera, animation })
+    Ok(Scene {
+        field,
+        texel_size,
+        wrap,
+        material,
+        environment,
+        key_lights,
+        local_lights,
+        spheres,
+        gi,
+        camera,
+        animation,
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -218,6 +231,7 @@ struct RawScene {
     environment: Option<Table>,
     key_light: Option<Vec<Table>>,
     local_light: Option<Vec<Table>>,
+    sphere: Option<Vec<Table>>,
     gi: Option<Table>,
     camera: Option<Table>,
     animation: Option<Table>,
@@ -303,6 +317,18 @@ struct RawGi {
     elevation_basis: Option<String>,
     visibility: Option<String>,
     sweep_near: Option<u32>,
+    blocker_epsilon: Option<f64>,
+    blocker_ratio: Option<bool>,
+    blocker_exp: Option<String>,
+    blocker_shading: Option<String>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawSphere {
+    center: Option<[f64; 3]>,
+    radius: Option<f64>,
+    albedo: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize, Default)]
@@ -343,6 +369,8 @@ struct RawAnimation {
     max_elevation_deg: Option<f64>,
     sweep_deg: Option<f64>,
     orbit_turns: Option<f64>,
+    // boulders
+    lap_frames: Option<u32>,
 }
 
 /// `n` (square) or `[w, h]`.
@@ -992,6 +1020,41 @@ impl Ctx<'_> {
         Ok(out)
     }
 
+    /// `[[sphere]]` tables: `center` and `radius` are required; `albedo` defaults to 0.5 grey.
+    fn spheres(&self, tables: &[Table], texel_size: f64) -> Result<Vec<SphereBlocker>> {
+        let mut out = Vec::with_capacity(tables.len());
+        for (i, t) in tables.iter().enumerate() {
+            let path = format!("sphere.{i}");
+            let raw: RawSphere = self.de_table(t, &path)?;
+            let key = |k: &str| format!("{path}.{k}");
+            let c = limits::MAX_COORDINATE;
+            let Some(center) = raw.center else {
+                return Err(
+                    self.err(Some(&key("center")), format!("{path}: `center = [x, y, z]` (world units) is required"))
+                );
+            };
+            if !center.iter().all(|v| v.is_finite() && v.abs() <= c) {
+                return Err(self.invalid(&key("center"), fmt_list(&center), format!("[x, y, z], each within ±{c:e}")));
+            }
+            let (lo, hi) = limits::LOCAL_RADIUS_TEXELS;
+            let (lo, hi) = (lo * texel_size, hi * texel_size);
+            let Some(radius) = raw.radius else {
+                return Err(self.err(Some(&key("radius")), format!("{path}: `radius` (world units) is required")));
+            };
+            if !(radius.is_finite() && radius >= lo && radius <= hi) {
+                return Err(self.invalid(
+                    &key("radius"),
+                    radius,
+                    format!("a number in [{lo:e}, {hi:e}] (world units)"),
+                ));
+            }
+            let albedo =
+                self.rgb(&key("albedo"), raw.albedo.unwrap_or([0.5; 3]), 0.0, 1.0, "[r, g, b] with each in [0, 1]")?;
+            out.push(SphereBlocker { center: DVec3::from_array(center), radius, albedo });
+        }
+        Ok(out)
+    }
+
     fn gi(&self, t: Option<&Table>) -> Result<GiSettings> {
         let raw: RawGi = self.de_opt(t, "gi")?;
         let param = |e: Error| self.wrap("gi", e);
@@ -1036,6 +1099,10 @@ impl Ctx<'_> {
             elevation_basis: parse_opt(&raw.elevation_basis).map_err(param)?.unwrap_or(d.elevation_basis),
             visibility: parse_opt(&raw.visibility).map_err(param)?.unwrap_or(d.visibility),
             sweep_near: raw.sweep_near.unwrap_or(d.sweep_near),
+            blocker_epsilon: raw.blocker_epsilon.unwrap_or(d.blocker_epsilon),
+            blocker_ratio: raw.blocker_ratio.unwrap_or(d.blocker_ratio),
+            blocker_exp: parse_opt(&raw.blocker_exp).map_err(param)?.unwrap_or(d.blocker_exp),
+            blocker_shading: parse_opt(&raw.blocker_shading).map_err(param)?.unwrap_or(d.blocker_shading),
         };
         gi.validate().map_err(param)?;
         Ok(gi)
@@ -1115,7 +1182,8 @@ impl Ctx<'_> {
         ];
         const BUMPS: &[&str] = &["count", "radius", "amplitude", "period", "travel", "shape"];
         const DAY: &[&str] = &["day_frames", "max_elevation_deg", "sweep_deg", "orbit_turns"];
-        let kinds: [(&str, &[&str]); 3] = [("water", WATER), ("bumps", BUMPS), ("day", DAY)];
+        const BOULDERS: &[&str] = &["lap_frames"];
+        let kinds: [(&str, &[&str]); 4] = [("water", WATER), ("bumps", BUMPS), ("day", DAY), ("boulders", BOULDERS)];
         let Some(t) = t else { return Ok(Animation::None) };
         let raw: RawAnimation = self.de_table(t, "animation")?;
         let kind = raw.kind.as_deref().unwrap_or("none");
@@ -1123,7 +1191,7 @@ impl Ctx<'_> {
             _ if kind == "none" => return Ok(Animation::None),
             Some((_, own)) => *own,
             None => {
-                let want = "\"none\", \"water\", \"bumps\" or \"day\"";
+                let want = "\"none\", \"water\", \"bumps\", \"day\" or \"boulders\"";
                 return Err(self.invalid("animation.kind", format!("{kind:?}"), want));
             }
         };
@@ -1157,6 +1225,11 @@ impl Ctx<'_> {
             };
             p.validate().map_err(check)?;
             Ok(Animation::Water(p))
+        } else if kind == "boulders" {
+            let d = crate::scene::boulders::BoulderParams::default();
+            let p = crate::scene::boulders::BoulderParams { lap_frames: raw.lap_frames.unwrap_or(d.lap_frames) };
+            p.validate().map_err(check)?;
+            Ok(Animation::Boulders(p))
         } else if kind == "day" {
             let d = crate::scene::day::DayParams::default();
             let p = crate::scene::day::DayParams {

@@ -1,5 +1,6 @@
 //! Scenes and height fields: the type, procedural generators and file loaders.
 pub mod animated;
+pub mod boulders;
 pub mod day;
 pub mod envmap;
 pub mod file;

@@ -206,6 +206,45 @@ settings_enum!(
     }
 );
 
+settings_enum!(
+    /// How a sphere blocker's log-SH visibility is exponentiated (`gi.blocker_exp`,
+    /// docs/blockers.md §3; Ren et al. 2006).
+    BlockerExp, "gi.blocker_exp", "`quadrature` or `linear`", {
+        /// Exact SH exponentiation: `exp(f(ω))` at a product quadrature of the sphere,
+        /// projected back to order n.
+        Quadrature = "quadrature",
+        /// Ren et al.'s optimal linear approximation with DC isolation:
+        /// `e^{f_0/√4π}·(a(‖f̂‖)·1 + b(‖f̂‖)·f̂)`.
+        Linear = "linear",
+    }
+);
+
+settings_enum!(
+    /// How the sphere blockers' visibility is formed and meets the height field's
+    /// (`gi.blocker_shading`, docs/blockers.md §4).
+    BlockerShading, "gi.blocker_shading", "`log`, `log_field`, `log_brdf` or `primal`", {
+        /// Log space (seed 001): the spheres' log-SH vectors summed, one exponentiation
+        /// `V_s = exp*(Σ f_i)`; the incident radiance `T` times `V_s` (one SH product per texel).
+        Log = "log",
+        /// As `log`, and the environment's visibility joins the sum (seed 001 in full):
+        /// `exp*(f_hf + Σ f_i)` with `f_hf = log ε·(1 − V_env)`; key lights as in `log`.
+        LogField = "log_field",
+        /// As `log_field`, and the environment's diffuse light in log space too (seed 001 §5):
+        /// the transfer `exp*(f_hf + Σ f_i + f_ρ(N))` with the log-SH diffuse BRDF
+        /// `f_ρ = ln max(cos θ/π, ε_ρ)` (`ε_ρ` = [`LOG_BRDF_EPSILON`]) dotted with the
+        /// lighting: no triple product for it.
+        LogBrdf = "log_brdf",
+        /// Primal space: each sphere's exact visibility `1 − cap` (its order-n projection),
+        /// multiplied together by SH products; no `ε`, no exponentiation.
+        Primal = "primal",
+    }
+);
+
+/// The floor `ε_ρ` of the log-SH diffuse BRDF `ln max(cos θ/π, ε_ρ)` (`gi.blocker_shading =
+/// "log_brdf"`): small, since every direction where the cosine lobe is below it lets `ε_ρ`
+/// through (`ε_ρ = 0.2` would add 2.5× the lobe's own weight over the sphere).
+pub const LOG_BRDF_EPSILON: f64 = 0.01;
+
 /// `gi.visibility = "sweep"` needs a non-periodic field: the error when `wrap` and `gi` combine
 /// them (the scene parser and [`Scene::check_limits`] both ask here).
 pub fn check_sweep(wrap: bool, gi: &GiSettings) -> Result<()> {
@@ -287,6 +326,14 @@ pub struct GiSettings {
     /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
     /// docs/direct.md §7), 0..=64; the sweep lines give the horizon beyond.
     pub sweep_near: u32,
+    /// Sphere blockers: the visibility `ε` of a blocked direction in log space (`log ε`
+    /// replaces `−∞`), in (0, 1); the paper's figures use 0.2 (docs/blockers.md).
+    pub blocker_epsilon: f64,
+    /// Sphere blockers: scale each sphere's log-SH vector by `r/d` (seed 001's "ratio
+    /// attenuation").
+    pub blocker_ratio: bool,
+    pub blocker_exp: BlockerExp,
+    pub blocker_shading: BlockerShading,
 }
 
 impl Default for GiSettings {
@@ -311,12 +358,20 @@ impl GiSettings {
             Quality::High => (6, 64, 12, 8, 1, 8, 6, 16, (4, 0)),
             Quality::Ultra => (8, 128, 24, 8, 1, 16, 8, 64, (0, 0)),
         };
+        // Azimuths per local light (docs/local-lights.md §5: direct error 0.13–0.9% at 8,
+        // 0.02–0.26% at 16 on the hard fields).
+        let local = match q {
+            Quality::Draft => 4,
+            Quality::Default | Quality::Paper => 8,
+            Quality::High => 16,
+            Quality::Ultra => 32,
+        };
         let paper = q == Quality::Paper;
         Self {
             sh_order: n,
             azimuths: m,
             key_light_azimuths: 3,
-            local_light_azimuths: 8,
+            local_light_azimuths: local,
             level_step: k,
             level_offset: o,
             subsample: sub,
@@ -338,6 +393,10 @@ impl GiSettings {
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
             visibility: VisibilityMethod::Ladder,
             sweep_near: 16,
+            blocker_epsilon: 0.2,
+            blocker_ratio: true,
+            blocker_exp: BlockerExp::Quadrature,
+            blocker_shading: BlockerShading::Log,
         }
     }
 
@@ -347,7 +406,10 @@ impl GiSettings {
         GiSettings {
             bounces: self.bounces,
             key_light_azimuths: self.key_light_azimuths,
-            local_light_azimuths: self.local_light_azimuths,
+            blocker_epsilon: self.blocker_epsilon,
+            blocker_ratio: self.blocker_ratio,
+            blocker_exp: self.blocker_exp,
+            blocker_shading: self.blocker_shading,
             pyramid: self.pyramid,
             glossy_pyramid: self.glossy_pyramid,
             amortize: self.amortize,
@@ -363,7 +425,8 @@ impl GiSettings {
         format!(
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
-             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} sweep_near={} key_light_azimuths={} bounces={}",
+             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} sweep_near={} key_light_azimuths={} bounces={} \
+             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -385,7 +448,12 @@ impl GiSettings {
             self.visibility,
             self.sweep_near,
             self.key_light_azimuths,
-            self.bounces
+            self.bounces,
+            self.local_light_azimuths,
+            self.blocker_epsilon,
+            self.blocker_ratio,
+            self.blocker_exp,
+            self.blocker_shading
         )
     }
 
@@ -461,6 +529,51 @@ pub struct LocalLight {
     pub radius: f64,
     /// Uniform RGB radiance of its surface.
     pub radiance: [f64; 3],
+}
+
+/// `[[sphere]]`: an opaque sphere blocker (CONVENTIONS.md "Lighting"; docs/blockers.md): it
+/// blocks every ray that intersects it. Spheres do not reflect light onto the field (their
+/// albedo shades them in the view image).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SphereBlocker {
+    /// World position of the centre.
+    pub center: DVec3,
+    /// Radius in world units (> 0).
+    pub radius: f64,
+    /// Diffuse albedo (view image).
+    pub albedo: [f64; 3],
+}
+
+impl SphereBlocker {
+    /// Sphere `k` of a scene of texel size `texel_size`: a centre within
+    /// ±[`limits::MAX_COORDINATE`], a radius of [`limits::LOCAL_RADIUS_TEXELS`] texels, an
+    /// albedo in [0, 1].
+    pub fn check(&self, k: usize, texel_size: f64) -> Result<()> {
+        let c = limits::MAX_COORDINATE;
+        if !self.center.to_array().iter().all(|x| within(*x, -c, c)) {
+            return Err(Error::param(
+                format!("sphere {k} center"),
+                format!("{:?}", self.center),
+                format!("each within ±{c:e}"),
+            ));
+        }
+        let (lo, hi) = limits::LOCAL_RADIUS_TEXELS;
+        if !within(self.radius, lo * texel_size, hi * texel_size) {
+            return Err(Error::param(
+                format!("sphere {k} radius"),
+                self.radius,
+                format!(
+                    "a number in [{:e}, {:e}] world units ({lo:e}..{hi:e} texels)",
+                    lo * texel_size,
+                    hi * texel_size
+                ),
+            ));
+        }
+        if !self.albedo.iter().all(|v| within(*v, 0.0, 1.0)) {
+            return Err(Error::param(format!("sphere {k} albedo"), format!("{:?}", self.albedo), "each in [0, 1]"));
+        }
+        Ok(())
+    }
 }
 
 /// `[camera]`: a pinhole camera for the view image and for view-dependent (glossy) shading.
@@ -715,6 +828,8 @@ pub struct Scene {
     pub key_lights: Vec<KeyLight>,
     /// `[[local_light]]`s (docs/local-lights.md).
     pub local_lights: Vec<LocalLight>,
+    /// `[[sphere]]` blockers (docs/blockers.md).
+    pub spheres: Vec<SphereBlocker>,
     pub gi: GiSettings,
     pub camera: Camera,
     /// `[animation]`: what moves (`Animation::None` for a static scene).
@@ -740,6 +855,9 @@ impl Scene {
             l.check(k, self.texel_size)?;
         }
         check_local_wrap(self.wrap, self.local_lights.len())?;
+        for (k, b) in self.spheres.iter().enumerate() {
+            b.check(k, self.texel_size)?;
+        }
         self.material.check()?;
         self.camera.check()?;
         check_sweep(self.wrap, &self.gi)
@@ -772,6 +890,10 @@ impl GiSettings {
         check("gi.radial_probes", self.radial_probes, 0, 16)?;
         check("gi.radial_probes_later", self.radial_probes_later, 0, 16)?;
         check("gi.sweep_near", self.sweep_near, 0, 64)?;
+        let e = self.blocker_epsilon;
+        if !(e.is_finite() && (1e-6..1.0).contains(&e)) {
+            return Err(Error::param("gi.blocker_epsilon", e, "a number in [1e-6, 1)"));
+        }
         Ok(())
     }
 

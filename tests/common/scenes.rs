@@ -42,6 +42,7 @@ pub fn scene(field: HeightField) -> Scene {
         environment: sky(8),
         key_lights: vec![key_light(30.0, 200.0, 5.0, 4.0)],
         local_lights: vec![],
+        spheres: vec![],
         gi: GiSettings::default(),
         camera,
         animation: Default::default(),

@@ -61,6 +61,15 @@ impl Planner {
                 reason: "always: the shading texture (total, direct, indirect, glossy)".into(),
             },
             PlannedPass {
+                name: "BlockerPass",
+                created: self.spheres > 0,
+                reason: if self.spheres > 0 {
+                    format!("{} sphere blocker{} ({})", self.spheres, plural(self.spheres), self.blockers)
+                } else {
+                    "no sphere blockers".into()
+                },
+            },
+            PlannedPass {
                 name: "LocalLightPass",
                 created: self.local_lights > 0,
                 reason: if self.local_lights > 0 {
