@@ -719,3 +719,68 @@ fn for_renderer_draws_the_renderers_spheres() {
     view.destroy(&ctx);
     renderer.destroy(&ctx);
 }
+
+/// The height field's cast shadow on a sphere (docs/view.md §6): a sphere beside a wall, lit by
+/// one key light behind the wall, black environment, seen from straight above (the centre pixel
+/// is the sphere's top, normal +z). The key light's visible fraction is the linear ramp
+/// `clamp((e + α − ω_b) / 2α, 0, 1)` of the blocking angle `ω_b` seen from the top point.
+#[test]
+fn the_field_shadows_the_spheres() {
+    use std::f64::consts::PI;
+    let ctx = gpu();
+    let (n, size, fov) = (33, 65u32, 40.0);
+    let env = Environment { sh: Vec::new() };
+    // Elevation 30°, azimuth 0 (behind the wall, which runs along y at x ∈ [20, 21]).
+    let keys = vec![common::scenes::key_light(30.0, 0.0, 3.0, 5.0)];
+    let w = size as usize;
+    let top = |offset: f64, wall: Option<f32>, env: &Environment| -> ([f32; 4], SphereBlocker) {
+        let base = offset as f32;
+        let inp = Inputs::new(&ctx, n, n, |i, _| {
+            let z = if (20..=21).contains(&i) { wall.map_or(base, |h| base + h) } else { base };
+            (z, [0.5; 3])
+        });
+        let cam = camera([14.0, 16.0, offset + 40.0], [14.0, 16.0, offset], fov, size, size);
+        let mut pass = inp.pass(&ctx, &cam, Some(1)).unwrap();
+        pass.set_sphere_lighting(&ctx, env, &keys).unwrap();
+        let sphere =
+            SphereBlocker { center: DVec3::new(14.0, 16.0, offset + 4.0), radius: 3.0, albedo: [0.8, 0.5, 0.3] };
+        pass.set_spheres(&ctx, std::slice::from_ref(&sphere)).unwrap();
+        let px = render(&ctx, &pass)[(w / 2) * w + w / 2];
+        pass.destroy(&ctx);
+        inp.destroy(&ctx);
+        (px, sphere)
+    };
+    for offset in [0.0, 1e6] {
+        // No wall: the unshadowed formula (the field is below the top point's horizontal).
+        let (open, sphere) = top(offset, None, &env);
+        let lit = sphere_colour_up(&sphere, &env, &keys);
+        assert_close(open, lit, &format!("offset {offset}: no wall"));
+        // A tall wall (height 30, ω_b ≈ 75° > e + α = 33°): the key light is hidden.
+        let (hidden, _) = top(offset, Some(30.0), &env);
+        let ratio = (0..3).map(|i| f64::from(hidden[i]) / lit[i]).fold(0.0, f64::max);
+        eprintln!("offset {offset}: tall wall: GPU {:?}, {ratio:.2e} of the unshadowed colour", &hidden[..3]);
+        assert!(ratio < 0.01 && hidden[3] == 1.0, "offset {offset}: {hidden:?} vs unshadowed {lit:?}");
+        // A wall whose top edge (6 texels away, 7 + 6·tan 30° high) is seen from the top point
+        // at the light's elevation: half the cap is visible. The expected fraction uses the
+        // wall height as stored in f32 (offset + h rounded to 1/16 at 1e6).
+        let h = 7.0 + 6.0 * (PI / 6.0).tan();
+        let stored = f64::from(offset as f32 + h as f32) - offset;
+        let wb = ((stored - 7.0) / 6.0).atan();
+        let alpha = keys[0].angular_radius;
+        let vis = ((PI / 6.0 + alpha - wb) / (2.0 * alpha)).clamp(0.0, 1.0);
+        let (half, _) = top(offset, Some(h as f32), &env);
+        assert_close(
+            half,
+            lit.map(|c| c * vis),
+            &format!("offset {offset}: wall at the light's elevation (V = {vis:.4})"),
+        );
+        // A uniform environment of radiance 1 (E = π on the top, no key light through the tall
+        // wall): the occlusion factor F = mean over 8 azimuths of 1 / (1 + tan²ω⁺): toward the
+        // wall (φ = 0) the slope is (30 − 7)/6, at φ = ±45° the wall is 6√2 texels away, the
+        // other 5 azimuths see the flat field below the point's horizontal.
+        let (m0, m45) = (23.0 / 6.0, 23.0 / (6.0 * 2f64.sqrt()));
+        let f = (5.0 + 1.0 / (1.0 + m0 * m0) + 2.0 / (1.0 + m45 * m45)) / 8.0;
+        let (occluded, _) = top(offset, Some(30.0), &common::scenes::uniform(1.0));
+        assert_close(occluded, sphere.albedo.map(|a| a * f), &format!("offset {offset}: environment, F = {f:.4}"));
+    }
+}

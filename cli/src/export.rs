@@ -54,6 +54,20 @@ pub fn export(a: ExportArgs) -> Result<()> {
         writeln!(t, "\n[[key_light]]\ndirection = {}", rgb(d.to_array()))?;
         writeln!(t, "angular_radius = {:e}\nradiance = {}", l.angular_radius, rgb(l.radiance))?;
     }
+    // Local lights and sphere blockers (CONVENTIONS.md "Lighting"), world units.
+    for l in &scene.local_lights {
+        writeln!(t, "\n[[local_light]]\nposition = {}", rgb(l.position.to_array()))?;
+        writeln!(t, "radius = {:e}\nradiance = {}", l.radius, rgb(l.radiance))?;
+    }
+    for b in &scene.spheres {
+        writeln!(
+            t,
+            "\n[[sphere]]\ncenter = {}\nradius = {:e}\nalbedo = {}",
+            rgb(b.center.to_array()),
+            b.radius,
+            rgb(b.albedo)
+        )?;
+    }
     let (hp, sp) = (a.out.join("heights.f32"), a.out.join("scene.toml"));
     super::check_outputs(&[hp.as_path(), sp.as_path()], a.scene.as_deref(), &a.overrides)?;
     // Both files or neither (docs/robustness.md).

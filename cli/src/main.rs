@@ -72,7 +72,7 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Write a scene resolved to plain data for outside tools: DIR/heights.f32 (raw float32,
     /// row-major, world units) and DIR/scene.toml (size, texel size, albedo, environment SH,
-    /// key lights, bounces). The Mitsuba 3 peer check (tools/mitsuba_check.py) reads it.
+    /// key lights, local lights, spheres, bounces). The Mitsuba 3 peer check (tools/mitsuba_check.py) reads it.
     Export(export::ExportArgs),
     /// Print the passes and the stages a frame records, with the reason for each (no GPU).
     ///

@@ -11,7 +11,6 @@
 // planes that shade.direct has just written (the indirect bounces then carry it).
 // Twin: reference::local::local_exitance.
 #include "hfgi_shared.glsl"
-#include "hfgi_near.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };  // level 0 = absolute heights, W×H
@@ -20,68 +19,14 @@ layout(std430, binding = 2) readonly buffer Nodes { vec2 hfgi_nodes[]; };    // 
 layout(std430, binding = 3) readonly buffer Albedo { vec4 hfgi_albedo[]; };  // per texel (albedo_map)
 layout(std430, binding = 4) buffer Out { vec4 hfgi_out[]; };                 // the shading planes
 layout(push_constant) uniform Push { hfgi_LocalPush pc; };
+#define HFGI_FIELD_H(i) hfgi_levels[i]
+#define HFGI_FIELD_W pc.width
+#define HFGI_FIELD_HGT pc.height
+#define HFGI_FIELD_S pc.texel_size
+#include "hfgi_field.glsl"
 
 const float HFGI_PI = 3.14159265358979;
 const float HFGI_HALF_PI = 1.5707963267948966;
-
-float height(int x, int y) {
-    return hfgi_levels[uint(y) * pc.width + uint(x)];
-}
-
-// The bilinear surface at level-0 position q (clamped to the field).
-float bilinear(vec2 q) {
-    vec2 c = clamp(q, vec2(0.0), vec2(pc.width - 1u, pc.height - 1u));
-    ivec2 i = min(ivec2(floor(c)), ivec2(pc.width - 2u, pc.height - 2u));
-    vec2 f = c - vec2(i);
-    float a = mix(height(i.x, i.y), height(i.x + 1, i.y), f.x);
-    float b = mix(height(i.x, i.y + 1), height(i.x + 1, i.y + 1), f.x);
-    return mix(a, b, f.y);
-}
-
-// CONVENTIONS.md normals: central differences inside, one-sided at the border.
-vec3 normal_at(ivec2 p) {
-    int w = int(pc.width), h = int(pc.height);
-    int x0 = max(p.x - 1, 0), x1 = min(p.x + 1, w - 1), y0 = max(p.y - 1, 0), y1 = min(p.y + 1, h - 1);
-    float hx = (height(x1, p.y) - height(x0, p.y)) / (float(x1 - x0) * pc.texel_size);
-    float hy = (height(p.x, y1) - height(p.x, y0)) / (float(y1 - y0) * pc.texel_size);
-    return normalize(vec3(-hx, -hy, 1.0));
-}
-
-// sup F(t)/t for t ∈ (0, reach] texels along unit d from texel p, F the bilinear height above
-// p's (world units): one quadratic per cell the ray crosses, exact on the bilinear surface
-// (as the sweep's near field, hfgi_near_slope). False where the ray leaves the field at once.
-// Twin: reference::sweep::near_slope_on.
-bool hfgi_local_slope(vec2 p, vec2 d, float reach, out float best) {
-    best = -1e30;
-    vec2 n = vec2(pc.width, pc.height);
-    float ex = d.x > 0.0 ? (n.x - 1.0 - p.x) / d.x : (d.x < 0.0 ? p.x / -d.x : 1e30);
-    float ey = d.y > 0.0 ? (n.y - 1.0 - p.y) / d.y : (d.y < 0.0 ? p.y / -d.y : 1e30);
-    float t_end = min(reach, min(ex, ey));
-    if (t_end <= 0.0) return false;
-    vec2 stp = vec2(abs(d.x) > 1e-6 ? 1.0 / abs(d.x) : 1e30, abs(d.y) > 1e-6 ? 1.0 / abs(d.y) : 1e30);
-    vec2 dist = vec2(d.x > 0.0 ? floor(p.x) + 1.0 - p.x : p.x - ceil(p.x) + 1.0,
-                     d.y > 0.0 ? floor(p.y) + 1.0 - p.y : p.y - ceil(p.y) + 1.0);
-    vec2 tn = dist * stp;
-    float base = bilinear(p);
-    float ta = 0.0, fa = 0.0;
-    for (int guard = 0; guard < 4 * int(t_end) + 8; ++guard) {
-        float tb = min(min(tn.x, tn.y), t_end);
-        if (tb > ta + 1e-6) {
-            float len = tb - ta;
-            float fm = bilinear(p + (ta + 0.5 * len) * d) - base;
-            float fb = bilinear(p + tb * d) - base;
-            float a = 2.0 * (fb - 2.0 * fm + fa) / (len * len);
-            float b = (fb - fa) / len - a * len;
-            best = max(best, hfgi_piece_max(ta, tb, a, b, fa));
-            fa = fb;
-            ta = tb;
-        }
-        if (tb >= t_end) break;
-        if (tn.x <= tb) tn.x += stp.x;
-        if (tn.y <= tb) tn.y += stp.y;
-    }
-    return true;
-}
 
 // The cap's elevation window [ω_c − δ, ω_c + δ] on the half-plane of azimuth direction d;
 // false where it misses the cap. Twin: reference::cap::cap_window.
@@ -141,7 +86,8 @@ float light_irradiance(vec2 p, vec3 N, vec3 C, float r) {
         float t = inside ? 0.0 : bc - sqrt(max(bc * bc - (d - r) * (d + r), 0.0));
         float reach = max(t, 0.0) * cos(wc) / pc.texel_size;
         float best;
-        if (reach > 0.0 && hfgi_local_slope(p, dir, reach, best)) a = max(a, atan(best / pc.texel_size));
+        if (reach > 0.0 && hfgi_field_slope(p, dir, reach, hfgi_field_bilinear(p), best))
+            a = max(a, atan(best / pc.texel_size));
         if (b > a) E += w * slice(h, N.z, a, b);
     }
     return E;
@@ -150,8 +96,8 @@ float light_irradiance(vec2 p, vec3 N, vec3 C, float r) {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= int(pc.width) || p.y >= int(pc.height)) return;
-    vec3 N = normal_at(p);
-    vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
+    vec3 N = hfgi_field_normal(p);
+    vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, hfgi_field_height(p.x, p.y));
     vec3 E = vec3(0.0);
     for (uint i = 0u; i < pc.light_count; ++i) {
         vec4 c_hi = hfgi_lights[3u * i], c_lo = hfgi_lights[3u * i + 1u], L = hfgi_lights[3u * i + 2u];

@@ -21,6 +21,8 @@ layout(push_constant) uniform Push { hfgi_ViewPush pc; };
 
 layout(location = 0) out vec3 hfgi_normal;
 layout(location = 1) flat out vec3 hfgi_albedo;
+layout(location = 2) flat out vec4 hfgi_center_radius;  // for the field's shadow (sphere.frag)
+layout(location = 3) flat out vec3 hfgi_center_lo;
 
 // Corner k of a quad's two triangles, as (stack step, slice step).
 const uint HFGI_DS[6] = uint[6](0u, 1u, 1u, 0u, 1u, 0u);
@@ -44,6 +46,8 @@ void main() {
     }
     hfgi_normal = n;
     hfgi_albedo = sp.albedo.rgb;
+    hfgi_center_radius = sp.center_radius;
+    hfgi_center_lo = sp.center_lo.xyz;
     precise vec3 rel = ((sp.center_radius.xyz - pc.eye.xyz) - pc.eye_lo.xyz) + (sp.center_lo.xyz + sp.center_radius.w * n);
     gl_Position = pc.view_proj * vec4(rel, 1.0);
 }

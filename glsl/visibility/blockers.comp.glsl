@@ -33,31 +33,18 @@ layout(std430, binding = 5) writeonly buffer Out { float hfgi_bv[]; };        //
 layout(std430, binding = 6) readonly buffer Triple { uvec2 hfgi_triple[]; };  // (i | j<<8 | k<<16, γ bits)
 layout(push_constant) uniform Push { hfgi_BlockerPush pc; };
 #include "hfgi_sh.glsl"
+#define HFGI_FIELD_H(i) hfgi_levels[i]
+#define HFGI_FIELD_W pc.width
+#define HFGI_FIELD_HGT pc.height
+#define HFGI_FIELD_S pc.texel_size
+#include "hfgi_field.glsl"
 
 const float HFGI_SQRT_4PI = 3.5449077018110318;
 const float HFGI_TWO_PI = 6.283185307179586;
 
-float height(int x, int y) {
-    return hfgi_levels[uint(y) * pc.width + uint(x)];
-}
-
-float bilinear(vec2 q) {
-    vec2 c = clamp(q, vec2(0.0), vec2(pc.width - 1u, pc.height - 1u));
-    ivec2 i = min(ivec2(floor(c)), ivec2(pc.width - 2u, pc.height - 2u));
-    vec2 f = c - vec2(i);
-    float a = mix(height(i.x, i.y), height(i.x + 1, i.y), f.x);
-    float b = mix(height(i.x, i.y + 1), height(i.x + 1, i.y + 1), f.x);
-    return mix(a, b, f.y);
-}
-
 // CONVENTIONS.md normal of the texel nearest to level-0 position q (the culling plane).
 vec3 normal_near(vec2 q) {
-    ivec2 p = clamp(ivec2(floor(q + 0.5)), ivec2(0), ivec2(pc.width - 1u, pc.height - 1u));
-    int w = int(pc.width), h = int(pc.height);
-    int x0 = max(p.x - 1, 0), x1 = min(p.x + 1, w - 1), y0 = max(p.y - 1, 0), y1 = min(p.y + 1, h - 1);
-    float hx = (height(x1, p.y) - height(x0, p.y)) / (float(x1 - x0) * pc.texel_size);
-    float hy = (height(p.x, y1) - height(p.x, y0)) / (float(y1 - y0) * pc.texel_size);
-    return normalize(vec3(-hx, -hy, 1.0));
+    return hfgi_field_normal(clamp(ivec2(floor(q + 0.5)), ivec2(0), ivec2(pc.width - 1u, pc.height - 1u)));
 }
 
 float hfgi_f[HFGI_N2];
@@ -174,7 +161,7 @@ void main() {
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
     // The receiver's level-0 position (docs/direct.md §1) and world position.
     vec2 q = (vec2(r) + 0.5) * vec2(pc.width, pc.height) / vec2(pc.work_width, pc.work_height) - 0.5;
-    vec3 P = vec3(q * pc.texel_size, bilinear(q));
+    vec3 P = vec3(q * pc.texel_size, hfgi_field_bilinear(q));
     vec3 N = normal_near(q);
     uint receivers = pc.work_width * pc.work_height;
     uint idx = r.y * pc.work_width + r.x;

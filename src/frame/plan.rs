@@ -256,13 +256,17 @@ impl Planner {
             local_lights: scene.local_lights.len(),
             local_light_azimuths: gi.local_light_azimuths,
             spheres: scene.spheres.len(),
-            blockers: format!(
-                "ε = {}, {} exponentiation, {} shading{}",
-                gi.blocker_epsilon,
-                gi.blocker_exp,
-                gi.blocker_shading,
-                if gi.blocker_ratio { ", ratio attenuation" } else { "" }
-            ),
+            blockers: if gi.blocker_shading == crate::scene::model::BlockerShading::Primal {
+                "primal: SH products of exact caps".to_string()
+            } else {
+                format!(
+                    "{}: ε = {}, {} exponentiation{}",
+                    gi.blocker_shading,
+                    gi.blocker_epsilon,
+                    gi.blocker_exp,
+                    if gi.blocker_ratio { ", ratio attenuation" } else { "" }
+                )
+            },
             bounces: gi.bounces,
             albedo,
             specular: m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0)),

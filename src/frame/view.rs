@@ -23,7 +23,8 @@
 //!    the previous frame's attachment writes.
 //! 3. Dynamic rendering (`vkCmdBeginRendering`): clear to [`BACKGROUND`] and depth 0 (reversed
 //!    depth), one indexed instanced draw, with live sphere blockers ([`ViewPass::set_spheres`])
-//!    a second pipeline's instanced draw of one UV sphere per sphere (same depth buffer), and
+//!    a second pipeline's instanced draw of one UV sphere per sphere (same depth buffer; it
+//!    reads the heights buffer too, for the field's cast shadow on the spheres), and
 //!    at the end of rendering the MSAA resolve (`AVERAGE`) into the output image. With one
 //!    sample the output is rendered directly.
 //! 4. The output image → **TRANSFER_SRC_OPTIMAL**, colour-attachment writes → transfer reads
@@ -353,16 +354,19 @@ impl GpuSphere {
     }
 }
 
-/// The lighting of the view's spheres (docs/view.md §6), unshadowed: the environment's
-/// irradiance from its first 9 SH coefficients and each key light as a distant cap.
+/// The lighting of the view's spheres (docs/view.md §6): the environment's irradiance from its
+/// first 9 SH coefficients and each key light as a distant cap. The fragment shader multiplies
+/// them by the height field's cast shadow (an occlusion factor for the environment, a visible
+/// fraction per key light), which this host copy does not model.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SphereLighting {
     /// Irradiance SH coefficients `Â_l · L_lm` (RGB), `k = l(l+1) + m < 9`, with `Â_0 = π`,
     /// `Â_1 = 2π/3`, `Â_2 = π/4` (missing coefficients are 0).
     pub env: [[f64; 3]; 9],
-    /// Per key light: the unit direction `d` and `L · 2π(1 − cos α)`, the irradiance on a
-    /// surface facing it (times `max(N·d, 0)` elsewhere).
-    pub key_lights: Vec<(DVec3, [f64; 3])>,
+    /// Per key light: the unit direction `d`, `L · 2π(1 − cos α)`, the irradiance on a
+    /// surface facing it (times `max(N·d, 0)` elsewhere), and the angular radius `α` (radians;
+    /// the width of the field-shadow ramp, docs/view.md §6).
+    pub key_lights: Vec<(DVec3, [f64; 3], f64)>,
 }
 
 impl SphereLighting {
@@ -382,13 +386,15 @@ impl SphereLighting {
             .iter()
             .map(|l| {
                 let solid = 2.0 * PI * (1.0 - l.angular_radius.cos());
-                (l.direction.normalize_or_zero(), l.radiance.map(|v| v * solid))
+                (l.direction.normalize_or_zero(), l.radiance.map(|v| v * solid), l.angular_radius)
             })
             .collect();
         Self { env, key_lights }
     }
 
-    /// Irradiance `E(N)` at unit normal `n` (f64; what the fragment shader evaluates in f32).
+    /// Irradiance `E(N)` at unit normal `n` without the height field's shadow (f64; what the
+    /// fragment shader evaluates in f32 where the field blocks nothing: outside the field, or
+    /// every horizon seen from the point below the lights' caps and below the horizontal).
     pub fn irradiance(&self, n: DVec3) -> [f64; 3] {
         let (x, y, z) = (n.x, n.y, n.z);
         let b = [
@@ -406,7 +412,7 @@ impl SphereLighting {
         for (c, bk) in self.env.iter().zip(b) {
             (0..3).for_each(|i| e[i] += c[i] * bk);
         }
-        for (d, l) in &self.key_lights {
+        for (d, l, _) in &self.key_lights {
             let cos = n.dot(*d).max(0.0);
             (0..3).for_each(|i| e[i] += l[i] * cos);
         }
@@ -414,14 +420,14 @@ impl SphereLighting {
     }
 
     /// The buffer contents (std430, `Light` in glsl/view/sphere.frag.glsl): `uvec4` (x = key
-    /// lights), 9 × `vec4` coefficients, then per key light `vec4` direction and `vec4`
-    /// irradiance.
+    /// lights), 9 × `vec4` coefficients, then per key light `vec4` direction (xyz) and angular
+    /// radius (w) and `vec4` irradiance.
     fn bytes(&self) -> Vec<u8> {
         let mut v: Vec<[f32; 4]> = Vec::with_capacity(10 + 2 * self.key_lights.len());
         v.push(bytemuck::cast([self.key_lights.len() as u32, 0, 0, 0]));
         v.extend(self.env.iter().map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0]));
-        for (d, l) in &self.key_lights {
-            v.push([d.x as f32, d.y as f32, d.z as f32, 0.0]);
+        for (d, l, a) in &self.key_lights {
+            v.push([d.x as f32, d.y as f32, d.z as f32, *a as f32]);
             v.push([l[0] as f32, l[1] as f32, l[2] as f32, 0.0]);
         }
         bytemuck::cast_slice(&v).to_vec()
@@ -473,6 +479,8 @@ pub struct ViewPass {
     choice: TargetChoice,
     field: (usize, usize),
     texel_size: f64,
+    /// The heights buffer (bound to the sphere pipeline too, for the field's cast shadow).
+    heights: vk::DescriptorBufferInfo,
     camera: Camera,
     height_range: (f32, f32),
     model: CameraModel,
@@ -612,6 +620,7 @@ impl ViewPass {
             choice,
             field: (width, height),
             texel_size,
+            heights: inputs.heights.whole(),
             camera: camera.clone(),
             height_range: inputs.height_range,
             model,
@@ -780,7 +789,7 @@ impl ViewPass {
                 name: "view/spheres",
                 vertex: &shaders::VIEW_SPHERE_VERT,
                 fragment: &shaders::VIEW_SPHERE_FRAG,
-                kinds: &[DescriptorKind::StorageBuffer; 2],
+                kinds: &[DescriptorKind::StorageBuffer; 3],
                 push_size: std::mem::size_of::<ViewPush>() as u32,
                 color_format: self.choice.color_format,
                 depth_format: Some(self.choice.depth_format),
@@ -791,11 +800,24 @@ impl ViewPass {
                 max_sets: 1,
             },
         )
-        .and_then(|mut p| match p.allocate_set(ctx, &[Bind::Buffer(&spheres), Bind::Buffer(&light)]) {
-            Ok(set) => Ok((p, set)),
-            Err(e) => {
-                p.destroy(ctx);
-                Err(e)
+        .and_then(|mut p| {
+            // Binding 2 is the heights buffer, which the pass knows by handle only: allocated
+            // with a stand-in, then pointed at the heights.
+            match p.allocate_set(ctx, &[Bind::Buffer(&spheres), Bind::Buffer(&light), Bind::Buffer(&spheres)]) {
+                Ok(set) => {
+                    let info = [self.heights];
+                    let write = vk::WriteDescriptorSet::default()
+                        .dst_set(set)
+                        .dst_binding(2)
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .buffer_info(&info);
+                    unsafe { ctx.device().update_descriptor_sets(&[write], &[]) };
+                    Ok((p, set))
+                }
+                Err(e) => {
+                    p.destroy(ctx);
+                    Err(e)
+                }
             }
         });
         let (pipeline, set) = match made {

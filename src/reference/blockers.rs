@@ -17,7 +17,6 @@ use crate::math::shexp::{exp_optimal_linear, exp_quadrature, sphere_culled, sphe
 use crate::math::triple::{self, Triple};
 use crate::math::zh;
 use crate::scene::model::{BlockerExp, BlockerShading, Scene};
-use crate::scene::HeightField;
 
 const SQRT_4PI: f64 = 3.544_907_701_811_032;
 
@@ -28,19 +27,6 @@ pub struct BlockerVisibility {
     pub environment: Option<Vec<Vec<f64>>>,
     /// `log_brdf`: the environment's diffuse transfer `exp*(f_hf + Σ f_i + f_ρ(N))`.
     pub transfer: Option<Vec<Vec<f64>>>,
-}
-
-fn bilinear(field: &HeightField, x: f64, y: f64) -> f64 {
-    let (w, h) = (field.width(), field.height());
-    let cx = x.clamp(0.0, (w - 1) as f64);
-    let cy = y.clamp(0.0, (h - 1) as f64);
-    let i = (cx.floor() as usize).min(w.saturating_sub(2));
-    let j = (cy.floor() as usize).min(h.saturating_sub(2));
-    let (fx, fy) = (cx - i as f64, cy - j as f64);
-    let g = |a: usize, b: usize| f64::from(field.get(a.min(w - 1), b.min(h - 1)));
-    let a = g(i, j) + (g(i + 1, j) - g(i, j)) * fx;
-    let b = g(i, j + 1) + (g(i + 1, j + 1) - g(i, j + 1)) * fx;
-    a + (b - a) * fy
 }
 
 /// A log mode applies (`log_field` or `log_brdf`; it needs the environment set, the first set).
@@ -54,7 +40,7 @@ pub fn log_mode(scene: &Scene) -> bool {
 pub fn log_visibility(scene: &Scene, q: [f64; 2], nrm: [f64; 3]) -> Vec<f64> {
     let n = scene.gi.sh_order;
     let s = scene.texel_size;
-    let p = DVec3::new(q[0] * s, q[1] * s, bilinear(&scene.field, q[0], q[1]));
+    let p = DVec3::new(q[0] * s, q[1] * s, scene.field.bilinear(q[0], q[1]));
     let log_eps = scene.gi.blocker_epsilon.ln();
     let mut f = vec![0.0; n * n];
     for b in &scene.spheres {
@@ -74,7 +60,7 @@ pub fn log_visibility(scene: &Scene, q: [f64; 2], nrm: [f64; 3]) -> Vec<f64> {
 pub fn primal(scene: &Scene, tri: &Triple, q: [f64; 2], nrm: [f64; 3]) -> Vec<f64> {
     let n = scene.gi.sh_order;
     let s = scene.texel_size;
-    let p = DVec3::new(q[0] * s, q[1] * s, bilinear(&scene.field, q[0], q[1]));
+    let p = DVec3::new(q[0] * s, q[1] * s, scene.field.bilinear(q[0], q[1]));
     let mut v = vec![0.0; n * n];
     v[0] = SQRT_4PI;
     for b in &scene.spheres {

@@ -19,22 +19,6 @@ use glam::DVec3;
 use super::cap::{cap_azimuths_toward, cap_window};
 use super::sweep::near_slope_on;
 use crate::scene::model::{Albedo, LocalLight, Scene};
-use crate::scene::HeightField;
-
-/// The bilinear surface of `field` at level-0 position `(x, y)`, clamped to the field (as
-/// the shader reads it).
-fn bilinear(field: &HeightField, x: f64, y: f64) -> f64 {
-    let (w, h) = (field.width(), field.height());
-    let cx = x.clamp(0.0, (w - 1) as f64);
-    let cy = y.clamp(0.0, (h - 1) as f64);
-    let i = (cx.floor() as usize).min(w.saturating_sub(2));
-    let j = (cy.floor() as usize).min(h.saturating_sub(2));
-    let (fx, fy) = (cx - i as f64, cy - j as f64);
-    let g = |a: usize, b: usize| f64::from(field.get(a.min(w - 1), b.min(h - 1)));
-    let a = g(i, j) + (g(i + 1, j) - g(i, j)) * fx;
-    let b = g(i, j + 1) + (g(i + 1, j + 1) - g(i, j + 1)) * fx;
-    a + (b - a) * fy
-}
 
 /// `∫_a^b (N·ω) cos ω dω` on the half-plane of azimuth direction `d`, `h = N·(d, 0)`.
 pub fn slice(h: f64, nz: f64, a: f64, b: f64) -> f64 {
@@ -72,7 +56,7 @@ pub fn light_irradiance(scene: &Scene, x: usize, y: usize, nrm: [f64; 3], light:
         let t = if inside { 0.0 } else { bc - (bc * bc - (d - r) * (d + r)).max(0.0).sqrt() };
         let reach = t.max(0.0) * wc.cos() / s;
         if reach > 0.0 {
-            let height = |qx: f64, qy: f64| bilinear(field, qx, qy);
+            let height = |qx: f64, qy: f64| field.bilinear(qx, qy);
             if let Some(best) = near_slope_on(n, [x as f64, y as f64], dir, reach, height) {
                 a = a.max((best / s).atan());
             }

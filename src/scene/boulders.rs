@@ -82,25 +82,10 @@ impl Boulders {
             .map(|(radius, angle, dir, b)| {
                 let a = angle + dir * 2.0 * PI * t;
                 let (x, y) = (self.centre[0] + radius * a.cos(), self.centre[1] + radius * a.sin());
-                let ground = self.height_at(x / self.texel_size, y / self.texel_size);
+                let ground = self.field.bilinear(x / self.texel_size, y / self.texel_size);
                 SphereBlocker { center: DVec3::new(x, y, ground + b.radius), ..b.clone() }
             })
             .collect()
-    }
-
-    /// The bilinear surface at level-0 position `(x, y)`, clamped to the field.
-    fn height_at(&self, x: f64, y: f64) -> f64 {
-        let f = &self.field;
-        let (w, h) = (f.width(), f.height());
-        let cx = x.clamp(0.0, (w - 1) as f64);
-        let cy = y.clamp(0.0, (h - 1) as f64);
-        let i = (cx.floor() as usize).min(w.saturating_sub(2));
-        let j = (cy.floor() as usize).min(h.saturating_sub(2));
-        let (fx, fy) = (cx - i as f64, cy - j as f64);
-        let g = |a: usize, b: usize| f64::from(f.get(a.min(w - 1), b.min(h - 1)));
-        let a = g(i, j) + (g(i + 1, j) - g(i, j)) * fx;
-        let b = g(i, j + 1) + (g(i + 1, j + 1) - g(i, j + 1)) * fx;
-        a + (b - a) * fy
     }
 }
 

@@ -58,6 +58,21 @@ impl HeightField {
     pub fn get(&self, i: usize, j: usize) -> f32 {
         self.data[j * self.width + i]
     }
+    /// The bilinear surface (CONVENTIONS.md) at level-0 position `(x, y)` in texels, clamped
+    /// to the field, in f64 (the local lights' and sphere blockers' twins, the boulders'
+    /// resting height; the shaders read it the same way).
+    pub fn bilinear(&self, x: f64, y: f64) -> f64 {
+        let (w, h) = (self.width, self.height);
+        let cx = x.clamp(0.0, (w - 1) as f64);
+        let cy = y.clamp(0.0, (h - 1) as f64);
+        let i = (cx.floor() as usize).min(w.saturating_sub(2));
+        let j = (cy.floor() as usize).min(h.saturating_sub(2));
+        let (fx, fy) = (cx - i as f64, cy - j as f64);
+        let g = |a: usize, b: usize| f64::from(self.get(a.min(w - 1), b.min(h - 1)));
+        let a = g(i, j) + (g(i + 1, j) - g(i, j)) * fx;
+        let b = g(i, j + 1) + (g(i + 1, j + 1) - g(i, j + 1)) * fx;
+        a + (b - a) * fy
+    }
     /// `(min, max)` of the heights.
     pub fn range(&self) -> (f32, f32) {
         self.data.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))

@@ -396,7 +396,7 @@ impl GiSettings {
             blocker_epsilon: 0.2,
             blocker_ratio: true,
             blocker_exp: BlockerExp::Quadrature,
-            blocker_shading: BlockerShading::Log,
+            blocker_shading: BlockerShading::Primal,
         }
     }
 
