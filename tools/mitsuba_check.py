@@ -59,8 +59,8 @@ Everything but the intersection (sampling, SH, interpolation, sums) is numpy in 
 Mitsuba (variant llvm_ad_rgb; scalar_rgb only as a loud fallback) intersects float32 rays
 with the float32 mesh. Deterministic for a given --seed, whatever --chunk and --threads are.
 
-Usage: tools/mitsuba_check.py EXPORT_DIR --out FILE.exr [--spp N] [--key-spp N] [--local-spp N] [--bounce-spp N] [--refine R]
-                              [--seed S] [--threads T] [--chunk RAYS] [--eps E]
+Usage: tools/mitsuba_check.py EXPORT_DIR --out FILE.exr [--spp N] [--key-spp N] [--local-spp N] [--bounce-spp N]
+                              [--refine R] [--seed S] [--threads T] [--chunk RAYS] [--eps E]
 """
 
 import argparse
