@@ -49,8 +49,9 @@ float slice(float h, float nz, float a, float b) {
     return 0.5 * h * ((b - a) + sb * cb - sa * ca) + 0.5 * nz * (sb * sb - sa * sa);
 }
 
-// Irradiance E / L of one light (centre C relative to the texel, radius r) at texel p, normal N.
-float light_irradiance(vec2 p, vec3 N, vec3 C, float r) {
+// Irradiance E / L of one light (centre C relative to the texel, radius r) at texel p, normal N,
+// surface height `base` at p (what the horizon slopes are measured from).
+float light_irradiance(vec2 p, float base, vec3 N, vec3 C, float r) {
     float d = length(C);
     bool inside = d <= r;
     float sin_a = inside ? 1.0 : r / d;
@@ -86,7 +87,7 @@ float light_irradiance(vec2 p, vec3 N, vec3 C, float r) {
         float t = inside ? 0.0 : bc - sqrt(max(bc * bc - (d - r) * (d + r), 0.0));
         float reach = max(t, 0.0) * cos(wc) / pc.texel_size;
         float best;
-        if (reach > 0.0 && hfgi_field_slope(p, dir, reach, hfgi_field_bilinear(p), best))
+        if (reach > 0.0 && hfgi_field_slope(p, dir, reach, base, best))
             a = max(a, atan(best / pc.texel_size));
         if (b > a) E += w * slice(h, N.z, a, b);
     }
@@ -99,12 +100,13 @@ void main() {
     vec3 N = hfgi_field_normal(p);
     vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, hfgi_field_height(p.x, p.y));
     vec3 E = vec3(0.0);
+    float base = hfgi_field_bilinear(vec2(p)); // once per texel, not per light and slice
     for (uint i = 0u; i < pc.light_count; ++i) {
         vec4 c_hi = hfgi_lights[3u * i], c_lo = hfgi_lights[3u * i + 1u], L = hfgi_lights[3u * i + 2u];
         if (all(equal(L.rgb, vec3(0.0)))) continue;
         // (c_hi − P) + c_lo: the f64 centre relative to the texel, exact near the surface.
         precise vec3 C = (c_hi.xyz - P) + c_lo.xyz;
-        E += L.rgb * light_irradiance(vec2(p), N, C, c_hi.w);
+        E += L.rgb * light_irradiance(vec2(p), base, N, C, c_hi.w);
     }
     vec3 rho = pc.albedo_map != 0u ? hfgi_albedo[uint(p.y) * pc.width + uint(p.x)].rgb : pc.albedo.rgb;
     vec3 add = rho * E * 0.31830988618379067;

@@ -40,7 +40,8 @@ use super::{check_order, sh, zh};
 use std::f64::consts::PI;
 
 /// `√(4π)`: coefficient 0 of the constant function 1 (`y_0 = 1/√(4π)`).
-const SQRT_4PI: f64 = 3.544_907_701_811_032;
+/// `√(4π)`: the DC coefficient of the constant function 1.
+pub const SQRT_4PI: f64 = 3.544_907_701_811_032;
 
 /// A product quadrature over the sphere for SH exponentiation: `nz` Gauss–Legendre nodes in
 /// `z = cosθ` times `nphi` uniform samples `φ_j = (j + ½)·2π/nphi`, weight `w_i·2π/nphi`. The SH

@@ -13,12 +13,12 @@
 use glam::DVec3;
 
 use super::pyramid::rescale;
-use crate::math::shexp::{exp_optimal_linear, exp_quadrature, sphere_culled, sphere_log_vis, SphereQuadrature};
+use crate::math::shexp::{
+    exp_optimal_linear, exp_quadrature, sphere_culled, sphere_log_vis, SphereQuadrature, SQRT_4PI,
+};
 use crate::math::triple::{self, Triple};
 use crate::math::zh;
 use crate::scene::model::{BlockerExp, BlockerShading, Scene};
-
-const SQRT_4PI: f64 = 3.544_907_701_811_032;
 
 /// The blockers' visibility at every receiver (receiver-grid order): `V_s`, and in log mode
 /// the environment's combined vector (`env` = the environment set's `V` per receiver).
