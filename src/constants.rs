@@ -25,6 +25,12 @@ pub const PLANES: u32 = 6;
 /// (`math::shexp::OL_POINTS`, checked equal there).
 pub const OL_POINTS: u32 = 49;
 
+/// Intervals of the moment-matched log-ZH table in `u = 1 − cos Θ` (`math::logcap`).
+pub const MATCHED_INTERVALS: u32 = 256;
+/// With the matched log-ZH a receiver inside a sphere gets the constant log `−MATCHED_BLOCKED`
+/// (`e^{−30} ≈ 1e-13`: blocked).
+pub const MATCHED_BLOCKED: u32 = 30;
+
 /// `(name, value, unsigned)` of each constant the shaders see, as `#define HFGI_<name>
 /// <value>` (with a `u` suffix when `unsigned`: the plane indices multiply `uint`s).
 pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
@@ -39,4 +45,6 @@ pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
     ("PLANE_GLOSSY_INDIRECT", PLANE_GLOSSY_INDIRECT, true),
     ("PLANES", PLANES, true),
     ("OL_POINTS", OL_POINTS, false),
+    ("MATCHED_INTERVALS", MATCHED_INTERVALS, false),
+    ("MATCHED_BLOCKED", MATCHED_BLOCKED, false),
 ];

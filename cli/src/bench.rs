@@ -12,7 +12,7 @@ use clap::Args;
 use hfgi::frame::Renderer;
 use hfgi::reference::truth::{TruthOutput, TruthSettings};
 use hfgi::scene::model::{
-    BlockerExp, BlockerShading, GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene,
+    BlockerExp, BlockerLogCap, BlockerShading, GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene,
     VisibilityMethod,
 };
 use hfgi::vk::{Context, Recorder, StageTimer};
@@ -188,6 +188,13 @@ fn configs(base: &GiSettings, quick: bool, base_wraps: bool, content: Content) -
         }
         for m in [BlockerShading::Log, BlockerShading::LogField, BlockerShading::LogBrdf, BlockerShading::Primal] {
             push("blocker_shading", &|g| g.blocker_shading = m);
+        }
+        push("blocker_log_cap", &|g| g.blocker_log_cap = BlockerLogCap::Matched);
+        for m in [BlockerShading::LogField, BlockerShading::LogBrdf] {
+            push("blocker_log_cap", &|g| {
+                g.blocker_log_cap = BlockerLogCap::Matched;
+                g.blocker_shading = m;
+            });
         }
     }
     if content.local_lights {
@@ -426,10 +433,13 @@ fn settings_label(g: &GiSettings) -> String {
         VisibilityMethod::Ladder => String::new(),
     };
     let d = GiSettings::default();
-    let blockers = if (g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading)
-        != (d.blocker_epsilon, d.blocker_ratio, d.blocker_exp, d.blocker_shading)
+    let blockers = if (g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading, g.blocker_log_cap)
+        != (d.blocker_epsilon, d.blocker_ratio, d.blocker_exp, d.blocker_shading, d.blocker_log_cap)
     {
-        format!(" ε={} ratio={} exp={} {}", g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading)
+        format!(
+            " ε={} ratio={} exp={} {} cap={}",
+            g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading, g.blocker_log_cap
+        )
     } else {
         String::new()
     };

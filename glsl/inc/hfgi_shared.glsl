@@ -99,7 +99,7 @@ struct hfgi_LocalPush {
 };
 
 // Push constants of the sphere blockers' visibility (glsl/visibility/blockers.comp.glsl,
-// docs/blockers.md). 64 bytes.
+// docs/blockers.md). 112 bytes.
 struct hfgi_BlockerPush {
     uint width;         // full resolution (the heights)
     uint height;
@@ -113,10 +113,9 @@ struct hfgi_BlockerPush {
     uint env_offset;    // log mode: first float of the environment set's V in the visibility buffer
     float ol_step;      // spacing of the OL tables in ‖f̂‖
     uint triple_count;  // primal mode: entries of the SH triple-product table
-    uint pad1;
-    uint pad2;
-    uint pad3;
-    uint pad4;
+    vec4 camera;        // log_brdf: the camera (Phong lobe's view vector), high f32 part
+    vec4 camera_lo;     // … and the low part
+    float log_phong[8]; // log_brdf: √(4π/(2l+1)) · ZH of the log-SH Phong lobe (HFGI_MAX_SH_ORDER bands)
 };
 
 // Push constants of the indirect scan (indirect.scan). 80 bytes.

@@ -20,7 +20,8 @@ layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (
 // multiplied by their visibility V_s (binding 9); 2 log: as 1, but the environment set (set 0)
 // takes the combined exp*(f_hf + Σ f_i) (binding 9's second vector) instead of L ⊛ V_env ⊛ V_s;
 // 3 log_brdf: as 2, and the environment's diffuse irradiance is π⟨L_env, T_ρ⟩ with the transfer
-// T_ρ = exp*(f_hf + Σ f_i + f_ρ(N)) (binding 9's third vector) instead of ⟨L_env ⊛ V', cc_N⟩.
+// T_ρ = exp*(f_hf + Σ f_i + f_ρ(N)) (binding 9's third vector) instead of ⟨L_env ⊛ V', cc_N⟩,
+// and its glossy light ⟨L_env, T_φ⟩ with T_φ = exp*(f_hf + Σ f_i + f_φ(R)) (the fourth vector).
 layout(constant_id = 3) const uint HFGI_BLOCKERS = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
@@ -183,6 +184,17 @@ void main() {
             for (int m = -l; m <= l; ++m) {
                 int k = l * (l + 1) + m;
                 G += hfgi_T[k] * (hfgi_zh_glossy[l] * hfgi_y[k]);
+            }
+        }
+        if (HFGI_BLOCKERS == 3u && HFGI_INDIRECT == 0 && pc.set_count > 0u) {
+            // log_brdf: the environment's glossy term from its glossy transfer (seed 001
+            // eq. 27), ⟨L_env, T_φ⟩, instead of ⟨L_env ⊛ V', phong_R⟩ (hfgi_y holds Y(R)).
+            hfgi_interp(3u * receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+            for (int l = 0; l < HFGI_N; ++l) {
+                for (int m = -l; m <= l; ++m) {
+                    int k = l * (l + 1) + m;
+                    G += hfgi_V[k] * hfgi_light[uint(k)].rgb - hfgi_T2[k] * (hfgi_zh_glossy[l] * hfgi_y[k]);
+                }
             }
         }
         glossy = pc.specular.rgb * G;

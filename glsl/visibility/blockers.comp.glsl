@@ -2,14 +2,16 @@
 // Sphere blockers' visibility (stage `visibility.blockers`; docs/blockers.md, after seed 001
 // §3–4 and Ren et al. 2006): per receiver of the working grid, the sum in log-SH space of each
 // sphere's log-ZH — the cap of half-angle asin(r/d) toward the sphere times log ε, rotated
-// toward it (eq. 24–26), times r/d with ratio attenuation, culled when the whole sphere is
+// toward it (eq. 24–26), times r/d with ratio attenuation (or, HFGI_MATCHED, the moment-matched
+// log-ZH of the cap, math::logcap), culled when the whole sphere is
 // below the receiver's tangent plane — then one SH exponentiation: by quadrature
 // (HFGI_EXP = 0: exp(f) at a product rule of the sphere, projected back) or Ren et al.'s optimal
 // linear approximation with DC isolation (HFGI_EXP = 1). With HFGI_LOG = 1 the environment's
 // height-field visibility joins the sum as f_hf = log ε·(1 − V_env) (the wedge construction of
 // eq. 15–23 in log space, by linearity) and a second vector is written: exp*(f_hf + Σ f_i).
 // Output per receiver: V_s = exp*(Σ f_i) (n² floats), then with HFGI_LOG the environment's,
-// then with HFGI_LOG = 2 its transfer exp*(f_hf + Σ f_i + f_ρ(N)) (log-SH diffuse BRDF, §5).
+// then with HFGI_LOG = 2 its transfer exp*(f_hf + Σ f_i + f_ρ(N)) (log-SH diffuse BRDF, §5)
+// and its glossy transfer exp*(f_hf + Σ f_i + f_φ(R)) (log-SH Phong lobe, eq. 27).
 // Twin: reference::blockers.
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
@@ -17,6 +19,7 @@ layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const uint HFGI_EXP = 0u; // 0: quadrature, 1: optimal linear
 layout(constant_id = 2) const uint HFGI_LOG = 0u; // 1: also exp*(f_hf + Σ f_i) for the environment; 2: and exp*(f_hf + Σ f_i + f_ρ(N))
 layout(constant_id = 3) const uint HFGI_PRIMAL = 0u; // 1: V_s = ⊛_i (1 − cap_i), no log space
+layout(constant_id = 4) const uint HFGI_MATCHED = 0u; // 1: the moment-matched log-ZH (math::logcap), no ε
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };   // level 0 = absolute heights
@@ -27,9 +30,10 @@ layout(std430, binding = 3) readonly buffer Consts {
     float hfgi_ol_a[HFGI_OL_POINTS]; // a(i·step) of the OL method at this order
     float hfgi_ol_b[HFGI_OL_POINTS];
     float hfgi_log_brdf[HFGI_MAX_SH_ORDER]; // √(4π/(2l+1)) · ZH of ln max(cos θ/π, ε_ρ)
+    float hfgi_matched[]; // HFGI_MATCHED: (K + 1) × n values √(4π/(2l+1)) · z_l(u_i)/u_i, u_i = i/K
 };
 layout(std430, binding = 4) readonly buffer Vis { float hfgi_vis[]; };        // the visibility sets (HFGI_LOG)
-layout(std430, binding = 5) writeonly buffer Out { float hfgi_bv[]; };        // receivers × n² (× 2 with HFGI_LOG)
+layout(std430, binding = 5) writeonly buffer Out { float hfgi_bv[]; };        // receivers × n² (× 2 with HFGI_LOG = 1, × 4 with 2)
 layout(std430, binding = 6) readonly buffer Triple { uvec2 hfgi_triple[]; };  // (i | j<<8 | k<<16, γ bits)
 layout(push_constant) uniform Push { hfgi_BlockerPush pc; };
 #include "hfgi_sh.glsl"
@@ -72,6 +76,29 @@ void add_cap(vec3 l, float s, float x, float scale) {
             int k = band * (band + 1) + m;
             hfgi_f[k] += scale * HFGI_TWO_PI * il * hfgi_y[k];
         }
+    }
+}
+
+// f += the moment-matched log-ZH of the cap with u = 1 − cos Θ, rotated to unit l: u times
+// the Catmull–Rom interpolation of the table (ends extended linearly). Twin:
+// math::logcap::MatchedCaps::zh and matched_log_vis.
+float matched_row(int j, int band) {
+    const int K = HFGI_MATCHED_INTERVALS;
+    if (j < 0) return 2.0 * hfgi_matched[band] - hfgi_matched[HFGI_N + band];
+    if (j > K) return 2.0 * hfgi_matched[K * HFGI_N + band] - hfgi_matched[(K - 1) * HFGI_N + band];
+    return hfgi_matched[j * HFGI_N + band];
+}
+
+void add_matched(vec3 l, float u) {
+    hfgi_sh_eval(l);
+    float s = min(clamp(u, 0.0, 1.0) * float(HFGI_MATCHED_INTERVALS), float(HFGI_MATCHED_INTERVALS));
+    int i = min(int(floor(s)), HFGI_MATCHED_INTERVALS - 1);
+    float f = s - float(i);
+    for (int band = 0; band < HFGI_N; ++band) {
+        float p0 = matched_row(i - 1, band), p1 = matched_row(i, band);
+        float p2 = matched_row(i + 1, band), p3 = matched_row(i + 2, band);
+        float c = u * (p1 + 0.5 * f * ((p2 - p0) + f * ((2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) + f * (3.0 * (p1 - p2) + p3 - p0))));
+        for (int m = -band; m <= band; ++m) hfgi_f[band * (band + 1) + m] += c * hfgi_y[band * (band + 1) + m];
     }
 }
 
@@ -177,14 +204,15 @@ void main() {
         if (rad <= 0.0) continue; // an empty slot
         precise vec3 C = (c_hi.xyz - P) + c_lo.xyz;
         float d = length(C);
-        if (d <= rad) {
-            hfgi_f[0] += pc.log_eps * HFGI_SQRT_4PI; // inside the sphere: fully blocked
+        if (d <= rad) { // inside the sphere: fully blocked
+            hfgi_f[0] += (HFGI_MATCHED != 0u ? -float(HFGI_MATCHED_BLOCKED) : pc.log_eps) * HFGI_SQRT_4PI;
             continue;
         }
         if (dot(N, C) < -rad) continue; // below the tangent plane: hides nothing
         float s = rad / d;
         float x = sqrt((d - rad) * (d + rad)) / d;
-        add_cap(C / d, s, x, pc.ratio != 0u ? pc.log_eps * s : pc.log_eps);
+        if (HFGI_MATCHED != 0u) add_matched(C / d, s * s / (1.0 + x));
+        else add_cap(C / d, s, x, pc.ratio != 0u ? pc.log_eps * s : pc.log_eps);
     }
     exponentiate();
     for (int k = 0; k < HFGI_N2; ++k) hfgi_bv[idx * uint(HFGI_N2) + uint(k)] = hfgi_v[k];
@@ -203,6 +231,18 @@ void main() {
                 for (int m = -l; m <= l; ++m) hfgi_f[l * (l + 1) + m] += hfgi_log_brdf[l] * hfgi_y[l * (l + 1) + m];
             exponentiate();
             o = (2u * receivers + idx) * uint(HFGI_N2);
+            for (int k = 0; k < HFGI_N2; ++k) hfgi_bv[o + uint(k)] = hfgi_v[k];
+            // The glossy transfer: the log-SH Phong lobe (eq. 27) about the reflected view
+            // vector instead of the diffuse lobe: exp*(f_hf + Σ f_i + f_φ(R)).
+            for (int l = 0; l < HFGI_N; ++l)
+                for (int m = -l; m <= l; ++m) hfgi_f[l * (l + 1) + m] -= hfgi_log_brdf[l] * hfgi_y[l * (l + 1) + m];
+            precise vec3 rel = (pc.camera.xyz - P) + pc.camera_lo.xyz; // as shade.direct's view vector
+            vec3 wo = normalize(rel);
+            hfgi_sh_eval(normalize(2.0 * dot(N, wo) * N - wo));
+            for (int l = 0; l < HFGI_N; ++l)
+                for (int m = -l; m <= l; ++m) hfgi_f[l * (l + 1) + m] += pc.log_phong[l] * hfgi_y[l * (l + 1) + m];
+            exponentiate();
+            o = (3u * receivers + idx) * uint(HFGI_N2);
             for (int k = 0; k < HFGI_N2; ++k) hfgi_bv[o + uint(k)] = hfgi_v[k];
         }
     }

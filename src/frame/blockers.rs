@@ -8,7 +8,7 @@
 //! radius, the low part; written at creation and by [`crate::frame::Renderer::set_spheres`]
 //! through `inputs.update`), `hfgi.blockers.quad` (the exponentiation's quadrature: per node
 //! its weight and the `n²` SH basis values), `hfgi.blockers.consts` (the `K_l^m` table and the
-//! optimal-linear `a`, `b` tables of order n), `hfgi.blockers.v` (per receiver `n²` floats,
+//! optimal-linear `a`, `b` tables of order n, the log-SH diffuse BRDF, the matched log-ZH table), `hfgi.blockers.v` (per receiver `n²` floats,
 //! twice with the log mode). Reads the heights (level 0, absolute) and, in log mode, the
 //! visibility pass's buffer. After `record`, a compute→compute barrier has been recorded.
 
@@ -21,7 +21,7 @@ use super::visibility::VisibilityPass;
 use crate::error::Result;
 use crate::math::shexp::{self, SphereQuadrature};
 use crate::rules::lighting::SetKind;
-use crate::scene::model::{BlockerExp, BlockerShading, Scene, SphereBlocker, LOG_BRDF_EPSILON};
+use crate::scene::model::{BlockerExp, BlockerLogCap, BlockerShading, Scene, SphereBlocker, LOG_BRDF_EPSILON};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
@@ -59,6 +59,26 @@ fn log_mode(scene: &Scene) -> u32 {
     }
 }
 
+/// Vectors per receiver in [`OUTPUT_BUFFER`]: `V_s`; with `log_field` the environment's
+/// `exp*(f_hf + Σ f_i)`; with `log_brdf` also its diffuse and glossy transfers.
+fn vectors(scene: &Scene) -> usize {
+    match log_mode(scene) {
+        0 => 1,
+        1 => 2,
+        _ => 4,
+    }
+}
+
+/// `√(4π/(2l+1))` times the log-SH Phong lobe of exponent `s` ([`shexp::log_phong_zh`], `ε_ρ`),
+/// for [`BlockerPush::log_phong`].
+fn log_phong(n: usize, s: f64) -> [f32; 8] {
+    let mut out = [0f32; 8];
+    for (l, z) in shexp::log_phong_zh(n, s, LOG_BRDF_EPSILON).into_iter().enumerate() {
+        out[l] = ((4.0 * std::f64::consts::PI / (2 * l + 1) as f64).sqrt() * z) as f32;
+    }
+    out
+}
+
 /// The [`SPHERES_BUFFER`] data: per sphere the centre as a high and a low f32 and the radius
 /// (radius 0: an empty slot, skipped).
 pub(crate) fn sphere_data(spheres: &[SphereBlocker]) -> Vec<[f32; 4]> {
@@ -89,8 +109,9 @@ fn quad_data(q: &SphereQuadrature) -> Vec<f32> {
 
 /// The [`CONSTS_BUFFER`] data: `K_l^m` (as `glsl/inc/hfgi_sh.glsl` reads it), the OL
 /// method's `a` and `b` tables of order `n`, then `√(4π/(2l+1))` times the log-SH diffuse
-/// BRDF's ZH (`log_brdf`; [`crate::math::shexp::log_diffuse_zh`]).
-fn consts_data(n: usize) -> Vec<f32> {
+/// BRDF's ZH (`log_brdf`; [`crate::math::shexp::log_diffuse_zh`]), then with the matched
+/// log-ZH its table as `√(4π/(2l+1))·z_l/u` ([`crate::math::logcap::MatchedCaps`]).
+fn consts_data(n: usize, matched: bool) -> Vec<f32> {
     let mut out: Vec<f32> = super::shade::klm_table(n).to_vec();
     let (a, b) = if n >= 2 { (shexp::OL_A[n - 2], shexp::OL_B[n - 2]) } else { ([1.0; 49], [1.0; 49]) };
     out.extend(a.iter().map(|v| *v as f32));
@@ -100,7 +121,19 @@ fn consts_data(n: usize) -> Vec<f32> {
         brdf[l] = ((4.0 * std::f64::consts::PI / (2 * l + 1) as f64).sqrt() * z) as f32;
     }
     out.extend(brdf);
+    if matched {
+        let t = crate::math::logcap::MatchedCaps::get(n).table();
+        out.extend(t.iter().enumerate().map(|(i, z)| {
+            let l = i % n;
+            ((4.0 * std::f64::consts::PI / (2 * l + 1) as f64).sqrt() * z) as f32
+        }));
+    }
     out
+}
+
+/// The log modes use the matched log-ZH (not with `primal`, which has no logs).
+fn matched(scene: &Scene) -> bool {
+    scene.gi.blocker_log_cap == BlockerLogCap::Matched && scene.gi.blocker_shading != BlockerShading::Primal
 }
 
 /// The [`TRIPLE_BUFFER`] data: every ordered `(i, j, k)` of the order-n triple product as
@@ -122,11 +155,11 @@ pub(crate) fn buffer_sizes(scene: &Scene) -> Vec<(&'static str, u64)> {
     let n = scene.gi.sh_order;
     let (ww, wh) = scene.gi.working_size(scene.field.width(), scene.field.height());
     let q = SphereQuadrature::pipeline_len(n);
-    let vectors = 1 + log_mode(scene) as usize;
+    let vectors = vectors(scene);
     vec![
         (SPHERES_BUFFER, (scene.spheres.len() * 32) as u64),
         (QUAD_BUFFER, (q * (n * n + 1) * 4) as u64),
-        (CONSTS_BUFFER, (consts_data(n).len() * 4) as u64),
+        (CONSTS_BUFFER, (consts_data(n, matched(scene)).len() * 4) as u64),
         (TRIPLE_BUFFER, (triple_data(n).len() * 8) as u64),
         (OUTPUT_BUFFER, (ww * wh * n * n * vectors * 4) as u64),
     ]
@@ -139,6 +172,8 @@ pub struct BlockerPass {
     buffers: Vec<Buffer>, // spheres, quad, consts, triple
     output: Buffer,
     push: BlockerPush,
+    order: usize,
+    view_dependent: bool,
 }
 
 impl BlockerPass {
@@ -153,7 +188,7 @@ impl BlockerPass {
         let datas: [Vec<u8>; 4] = [
             bytemuck::cast_slice(&sphere_data(&scene.spheres)).to_vec(),
             bytemuck::cast_slice(&quad_data(&q)).to_vec(),
-            bytemuck::cast_slice(&consts_data(n)).to_vec(),
+            bytemuck::cast_slice(&consts_data(n, matched(scene))).to_vec(),
             bytemuck::cast_slice(&triples).to_vec(),
         ];
         let mut bufs: Vec<Buffer> = Vec::new();
@@ -174,7 +209,7 @@ impl BlockerPass {
                 &shaders::VISIBILITY_BLOCKERS_COMP,
                 &[DescriptorKind::StorageBuffer; 7],
                 std::mem::size_of::<BlockerPush>() as u32,
-                &[(0, n as u32), (1, exp), (2, log_mode(scene)), (3, primal as u32)],
+                &[(0, n as u32), (1, exp), (2, log_mode(scene)), (3, primal as u32), (4, matched(scene) as u32)],
                 1,
             )?);
             p.allocate_set(
@@ -217,9 +252,36 @@ impl BlockerPass {
             env_offset: 0, // the environment set is the first set (rules::lighting::light_sets)
             ol_step: shexp::OL_STEP as f32,
             triple_count: triples.len() as u32,
-            pad: [0; 4],
+            ..Default::default()
         };
-        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, push })
+        let mut pass = Self {
+            pipeline: pipeline.expect("pipeline"),
+            descriptors,
+            buffers: bufs,
+            output,
+            push,
+            order: n,
+            view_dependent: log_mode(scene) == 2,
+        };
+        pass.set_view(scene.camera.position, f64::from(scene.material.exponent));
+        Ok(pass)
+    }
+
+    /// `log_brdf`: the camera and the Phong exponent of the glossy transfer (push constants;
+    /// [`crate::frame::Renderer::set_camera`] and `set_material` call it).
+    pub(crate) fn set_view(&mut self, camera: glam::DVec3, exponent: f64) {
+        let cam = camera.to_array();
+        let hi = cam.map(|v| v as f32);
+        let lo = [0, 1, 2].map(|i| (cam[i] - f64::from(hi[i])) as f32);
+        self.push.camera = [hi[0], hi[1], hi[2], 0.0];
+        self.push.camera_lo = [lo[0], lo[1], lo[2], 0.0];
+        self.push.log_phong = log_phong(self.order, exponent);
+    }
+
+    /// Whether the pass computes the glossy transfer (`log_brdf`), which depends on the view:
+    /// a camera or Phong-exponent change then re-runs the stage.
+    pub(crate) fn view_dependent(&self) -> bool {
+        self.view_dependent
     }
 
     pub fn record(&self, rec: &mut Recorder) {

@@ -333,13 +333,19 @@ impl Renderer {
                 ));
             }
         }
-        if material.exponent != old.material.exponent {
+        let exponent_changed = material.exponent != old.material.exponent;
+        if exponent_changed {
             let consts = shade::constants(old.gi.sh_order, f64::from(material.exponent), self.live.triple_count);
             let dst = self.shade.bindings()[3].raw;
             self.live.update(dst, 0, bytemuck::cast_slice(&consts).to_vec());
         }
         self.live.scene.material = material.clone();
         self.shade.push_mut().set_material(material);
+        if let Some(b) = self.blockers.as_mut().filter(|b| exponent_changed && b.view_dependent()) {
+            // log_brdf: the glossy transfer's Phong lobe (docs/blockers.md §3).
+            b.set_view(self.live.scene.camera.position, f64::from(material.exponent));
+            self.live.pending.spheres_moved = true;
+        }
         if let Some(l) = self.local.as_mut() {
             l.push_mut().set_material(material);
         }
@@ -359,6 +365,13 @@ impl Renderer {
         self.live.scene.camera = camera.clone();
         self.shade.push_mut().set_camera(camera.position);
         let spec = self.live.scene.material.specular.unwrap_or([0.0; 3]);
+        if let Some(b) = self.blockers.as_mut().filter(|b| b.view_dependent()) {
+            // log_brdf: the glossy transfer's view vector (docs/blockers.md §3).
+            b.set_view(camera.position, f64::from(self.live.scene.material.exponent));
+            if spec.iter().any(|v| *v != 0.0) {
+                self.live.pending.spheres_moved = true;
+            }
+        }
         if let Some(i) = self.indirect.as_mut() {
             i.update_pushes(|p| p.set_camera(camera.position), spec);
         }

@@ -258,6 +258,8 @@ impl Planner {
             spheres: scene.spheres.len(),
             blockers: if gi.blocker_shading == crate::scene::model::BlockerShading::Primal {
                 "primal: SH products of exact caps".to_string()
+            } else if gi.blocker_log_cap == crate::scene::model::BlockerLogCap::Matched {
+                format!("{}: moment-matched log-ZH, {} exponentiation", gi.blocker_shading, gi.blocker_exp)
             } else {
                 format!(
                     "{}: ε = {}, {} exponentiation{}",
@@ -394,7 +396,8 @@ impl Planner {
                 add(&mut omitted, Stage::VisibilityKeyLights, why.into());
             }
             if self.spheres > 0 && pend.spheres_moved {
-                let r = "sphere blockers moved or resized: their visibility is recomputed (heights unchanged)";
+                let r = "sphere blockers moved or resized (or, log_brdf on a glossy surface, the camera or the Phong \
+                         exponent changed): their visibility is recomputed (heights unchanged)";
                 add(&mut stages, Stage::VisibilityBlockers, r.into());
             } else if self.spheres > 0 {
                 add(&mut omitted, Stage::VisibilityBlockers, why.into());

@@ -184,8 +184,16 @@ pub struct BlockerPush {
     pub ol_step: f32,
     /// Primal mode: entries of the SH triple-product table.
     pub triple_count: u32,
-    pub pad: [u32; 4],
+    /// `log_brdf`: the camera (the Phong lobe's view vector) as a high f32 part …
+    pub camera: [f32; 4],
+    /// … and the low part (`camera + camera_lo` = the f64 position).
+    pub camera_lo: [f32; 4],
+    /// `log_brdf`: `√(4π/(2l+1))` times the log-SH Phong lobe's ZH (`shexp::log_phong_zh`),
+    /// bands `0..MAX_SH_ORDER`.
+    pub log_phong: [f32; 8],
 }
+
+const _: () = assert!(crate::constants::MAX_SH_ORDER == 8, "BlockerPush::log_phong holds MAX_SH_ORDER bands");
 
 /// `hfgi_ShadePush`: push constants of the direct shading pass.
 #[repr(C)]
@@ -355,7 +363,7 @@ const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
 const _: () = assert!(std::mem::size_of::<LocalPush>() == 48);
-const _: () = assert!(std::mem::size_of::<BlockerPush>() == 64);
+const _: () = assert!(std::mem::size_of::<BlockerPush>() == 112);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);
 
@@ -472,7 +480,10 @@ mod layout_against_glsl {
             ratio,
             env_offset,
             ol_step,
-            triple_count
+            triple_count,
+            camera,
+            camera_lo,
+            log_phong
         });
         layout!(LocalPush { width, height, light_count, azimuths, texel_size, albedo_map, albedo });
         layout!(IndirectPush {

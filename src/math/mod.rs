@@ -9,6 +9,7 @@ pub mod azimuth;
 pub mod bspline;
 pub mod elevation;
 pub mod legendre;
+pub mod logcap;
 pub mod nlp;
 pub mod quadrature;
 pub mod sh;

@@ -18,7 +18,7 @@ use crate::math::shexp::{
 };
 use crate::math::triple::{self, Triple};
 use crate::math::zh;
-use crate::scene::model::{BlockerExp, BlockerShading, Scene};
+use crate::scene::model::{BlockerExp, BlockerLogCap, BlockerShading, Scene};
 
 /// The blockers' visibility at every receiver (receiver-grid order): `V_s`, and in log mode
 /// the environment's combined vector (`env` = the environment set's `V` per receiver).
@@ -27,6 +27,9 @@ pub struct BlockerVisibility {
     pub environment: Option<Vec<Vec<f64>>>,
     /// `log_brdf`: the environment's diffuse transfer `exp*(f_hf + Σ f_i + f_ρ(N))`.
     pub transfer: Option<Vec<Vec<f64>>>,
+    /// `log_brdf`: its glossy transfer `exp*(f_hf + Σ f_i + f_φ(R))` (log-SH Phong lobe about
+    /// the reflected view vector, eq. 27).
+    pub glossy: Option<Vec<Vec<f64>>>,
 }
 
 /// A log mode applies (`log_field` or `log_brdf`; it needs the environment set, the first set).
@@ -35,7 +38,7 @@ pub fn log_mode(scene: &Scene) -> bool {
         && crate::rules::lighting::has_environment(scene)
 }
 
-/// `Σ_spheres f_i` at the receiver at level-0 position `q` with normal `nrm` (the nearest
+/// `Σ_spheres f_i` (seed 001's `ε` log-ZH or the matched one, `gi.blocker_log_cap`) at the receiver at level-0 position `q` with normal `nrm` (the nearest
 /// texel's).
 pub fn log_visibility(scene: &Scene, q: [f64; 2], nrm: [f64; 3]) -> Vec<f64> {
     let n = scene.gi.sh_order;
@@ -48,7 +51,11 @@ pub fn log_visibility(scene: &Scene, q: [f64; 2], nrm: [f64; 3]) -> Vec<f64> {
         if (b.center - p).length() > b.radius && sphere_culled(nrm, c, b.radius) {
             continue;
         }
-        if let Some(v) = sphere_log_vis(n, c, b.radius, log_eps, scene.gi.blocker_ratio) {
+        let v = match scene.gi.blocker_log_cap {
+            BlockerLogCap::Epsilon => sphere_log_vis(n, c, b.radius, log_eps, scene.gi.blocker_ratio),
+            BlockerLogCap::Matched => crate::math::logcap::matched_log_vis(n, c, b.radius),
+        };
+        if let Some(v) = v {
             f.iter_mut().zip(&v).for_each(|(a, b)| *a += b);
         }
     }
@@ -107,6 +114,11 @@ pub fn blocker_visibility(
     let brdf = (log && scene.gi.blocker_shading == BlockerShading::LogBrdf)
         .then(|| crate::math::shexp::log_diffuse_zh(n, crate::scene::model::LOG_BRDF_EPSILON));
     let mut transfer = brdf.as_ref().map(|_| Vec::with_capacity(work.0 * work.1));
+    let phong = brdf.as_ref().map(|_| {
+        let e = f64::from(scene.material.exponent);
+        crate::math::shexp::log_phong_zh(n, e, crate::scene::model::LOG_BRDF_EPSILON)
+    });
+    let mut glossy = brdf.as_ref().map(|_| Vec::with_capacity(work.0 * work.1));
     for r in 0..work.0 * work.1 {
         let q = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
         let (ix, iy) =
@@ -122,13 +134,29 @@ pub fn blocker_visibility(
             f.iter_mut().zip(&env[r]).for_each(|(a, v)| *a -= log_eps * v);
             f[0] += log_eps * SQRT_4PI;
             out.push(exponentiate(scene, &quad, &f));
-            if let (Some(t), Some(z)) = (transfer.as_mut(), brdf.as_ref()) {
-                f.iter_mut().zip(zh::rotate(n, z, nrm)).for_each(|(a, b)| *a += b);
-                t.push(exponentiate(scene, &quad, &f));
+            if let (Some(t), Some(z), Some(g), Some(zp)) =
+                (transfer.as_mut(), brdf.as_ref(), glossy.as_mut(), phong.as_ref())
+            {
+                let mut fd = f.clone();
+                fd.iter_mut().zip(zh::rotate(n, z, nrm)).for_each(|(a, b)| *a += b);
+                t.push(exponentiate(scene, &quad, &fd));
+                let r = reflected_view(scene, q, nrm);
+                f.iter_mut().zip(zh::rotate(n, zp, r)).for_each(|(a, b)| *a += b);
+                g.push(exponentiate(scene, &quad, &f));
             }
         }
     }
-    BlockerVisibility { spheres, environment, transfer }
+    BlockerVisibility { spheres, environment, transfer, glossy }
+}
+
+/// The reflected view vector `R = 2(N·ω_o)N − ω_o` at the receiver at level-0 position `q`
+/// (on the bilinear surface) with normal `nrm`, `ω_o` toward the scene camera.
+fn reflected_view(scene: &Scene, q: [f64; 2], nrm: [f64; 3]) -> [f64; 3] {
+    let s = scene.texel_size;
+    let p = DVec3::new(q[0] * s, q[1] * s, scene.field.bilinear(q[0], q[1]));
+    let wo = (scene.camera.position - p).normalize();
+    let nv = DVec3::from_array(nrm).normalize();
+    (2.0 * nv.dot(wo) * nv - wo).normalize().to_array()
 }
 
 /// `t ⊛ v` per RGB channel (truncated to order n), `t` RGB SH, `v` scalar SH.

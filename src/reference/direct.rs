@@ -303,6 +303,16 @@ impl Lobes {
         Self { n, cc: zh::clamped_cosine(n), phong }
     }
 
+    /// The Phong ZH rotated to the reflected view vector at texel `(x, y)` with normal `nrm`.
+    pub fn phong_at(&self, scene: &Scene, x: usize, y: usize, nrm: [f64; 3]) -> Vec<f64> {
+        let s = scene.texel_size;
+        let p = DVec3::new(x as f64 * s, y as f64 * s, scene.field.get(x, y) as f64);
+        let wo = (scene.camera.position - p).normalize();
+        let nv = DVec3::from_array(nrm);
+        let r = 2.0 * nv.dot(wo) * nv - wo;
+        zh::rotate(self.n, &self.phong, r.normalize().to_array())
+    }
+
     /// Diffuse `ρ/π · (T · cc_N)` and glossy `k_s · (T · phong_R)` exit radiance at texel
     /// `(x, y)` with normal `nrm`, for incident SH radiance `tr` (`n²` RGB).
     pub fn shade(&self, scene: &Scene, x: usize, y: usize, nrm: [f64; 3], tr: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
@@ -320,12 +330,7 @@ impl Lobes {
         let diffuse = [rho[0] / PI * e[0], rho[1] / PI * e[1], rho[2] / PI * e[2]];
         let glossy = match scene.material.specular {
             Some(ks) => {
-                let s = scene.texel_size;
-                let p = DVec3::new(x as f64 * s, y as f64 * s, scene.field.get(x, y) as f64);
-                let wo = (scene.camera.position - p).normalize();
-                let nv = DVec3::from_array(nrm);
-                let r = 2.0 * nv.dot(wo) * nv - wo;
-                let gz = zh::rotate(n, &self.phong, r.normalize().to_array());
+                let gz = self.phong_at(scene, x, y, nrm);
                 let gl: Vec<f64> = (0..3).map(|ch| (0..n * n).map(|k| tr[k][ch] * gz[k]).sum()).collect();
                 [ks[0] as f64 * gl[0], ks[1] as f64 * gl[1], ks[2] as f64 * gl[2]]
             }
@@ -431,6 +436,17 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
                 for ch in 0..3 {
                     let e: f64 = (0..n * n).map(|k| PI * lighting[0][k][ch] * t3[k] - tr_env[k][ch] * cc[k]).sum();
                     d[ch] += rho[ch] / PI * e;
+                }
+            }
+            let mut g = g;
+            if let (Some(tg), Some(ks)) = (blockers.as_ref().and_then(|b| b.glossy.as_ref()), scene.material.specular) {
+                // log_brdf: the environment's glossy term from its glossy transfer (eq. 27):
+                // k_s·(⟨L_env, T_φ⟩ − ⟨L_env ⊛ V', phong_R⟩).
+                let tg = interpolate(tg, work, xw, yw, scene.wrap);
+                let gz = lobes.phong_at(scene, x, y, normals[y * w + x]);
+                for ch in 0..3 {
+                    let e: f64 = (0..n * n).map(|k| lighting[0][k][ch] * tg[k] - tr_env[k][ch] * gz[k]).sum();
+                    g[ch] += ks[ch] as f64 * e;
                 }
             }
             direct.push(d);

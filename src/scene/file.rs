@@ -321,6 +321,7 @@ struct RawGi {
     blocker_ratio: Option<bool>,
     blocker_exp: Option<String>,
     blocker_shading: Option<String>,
+    blocker_log_cap: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -1103,6 +1104,7 @@ impl Ctx<'_> {
             blocker_ratio: raw.blocker_ratio.unwrap_or(d.blocker_ratio),
             blocker_exp: parse_opt(&raw.blocker_exp).map_err(param)?.unwrap_or(d.blocker_exp),
             blocker_shading: parse_opt(&raw.blocker_shading).map_err(param)?.unwrap_or(d.blocker_shading),
+            blocker_log_cap: parse_opt(&raw.blocker_log_cap).map_err(param)?.unwrap_or(d.blocker_log_cap),
         };
         gi.validate().map_err(param)?;
         Ok(gi)

@@ -220,6 +220,18 @@ settings_enum!(
 );
 
 settings_enum!(
+    /// Which log-ZH stands for a sphere blocker's cap in the log modes (`gi.blocker_log_cap`,
+    /// docs/blockers.md §2).
+    BlockerLogCap, "gi.blocker_log_cap", "`epsilon` or `matched`", {
+        /// Seed 001 eq. 24–26: `ln ε` times the cap's ZH (with `gi.blocker_ratio`, times `r/d`).
+        Epsilon = "epsilon",
+        /// Moment-matched (`math::logcap`): the log-ZH whose exponential has the n first
+        /// Legendre moments of the sphere's true visibility `1 − cap`; no `ε`, no ratio.
+        Matched = "matched",
+    }
+);
+
+settings_enum!(
     /// How the sphere blockers' visibility is formed and meets the height field's
     /// (`gi.blocker_shading`, docs/blockers.md §4).
     BlockerShading, "gi.blocker_shading", "`log`, `log_field`, `log_brdf` or `primal`", {
@@ -334,6 +346,8 @@ pub struct GiSettings {
     pub blocker_ratio: bool,
     pub blocker_exp: BlockerExp,
     pub blocker_shading: BlockerShading,
+    /// Sphere blockers, log modes: the spheres' log-ZH (seed 001's `ε` form or moment-matched).
+    pub blocker_log_cap: BlockerLogCap,
 }
 
 impl Default for GiSettings {
@@ -397,6 +411,7 @@ impl GiSettings {
             blocker_ratio: true,
             blocker_exp: BlockerExp::Quadrature,
             blocker_shading: BlockerShading::Primal,
+            blocker_log_cap: BlockerLogCap::Epsilon,
         }
     }
 
@@ -410,6 +425,7 @@ impl GiSettings {
             blocker_ratio: self.blocker_ratio,
             blocker_exp: self.blocker_exp,
             blocker_shading: self.blocker_shading,
+            blocker_log_cap: self.blocker_log_cap,
             pyramid: self.pyramid,
             glossy_pyramid: self.glossy_pyramid,
             amortize: self.amortize,
@@ -426,7 +442,7 @@ impl GiSettings {
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
              radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} sweep_near={} key_light_azimuths={} bounces={} \
-             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={}",
+             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -453,7 +469,8 @@ impl GiSettings {
             self.blocker_epsilon,
             self.blocker_ratio,
             self.blocker_exp,
-            self.blocker_shading
+            self.blocker_shading,
+            self.blocker_log_cap
         )
     }
 
