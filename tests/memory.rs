@@ -72,6 +72,11 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
             "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",
             with(&["gi.blocker_shading=\"primal\"", "gi.sh_order=6"]),
         ),
+        (
+            "spheres, log_brdf, matched log-ZH",
+            "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",
+            with(&["gi.blocker_shading=\"log_brdf\"", "gi.blocker_log_cap=\"matched\"", "environment.preset=\"sky\""]),
+        ),
     ]
 }
 
