@@ -12,8 +12,8 @@ use clap::Args;
 use hfgi::frame::Renderer;
 use hfgi::reference::truth::{TruthOutput, TruthSettings};
 use hfgi::scene::model::{
-    BlockerExp, BlockerLogCap, BlockerShading, GiSettings, Horizon, Interpolation, Level0, PyramidMode, Quality, Scene,
-    VisibilityMethod,
+    BlockerExp, BlockerKeyLights, BlockerLogCap, BlockerShading, GiSettings, Horizon, Interpolation, Level0,
+    PyramidMode, Quality, Scene, VisibilityMethod,
 };
 use hfgi::vk::{Context, Recorder, StageTimer};
 
@@ -190,6 +190,7 @@ fn configs(base: &GiSettings, quick: bool, base_wraps: bool, content: Content) -
             push("blocker_shading", &|g| g.blocker_shading = m);
         }
         push("blocker_log_cap", &|g| g.blocker_log_cap = BlockerLogCap::Matched);
+        push("blocker_key_lights", &|g| g.blocker_key_lights = BlockerKeyLights::Product);
         for m in [BlockerShading::LogField, BlockerShading::LogBrdf] {
             push("blocker_log_cap", &|g| {
                 g.blocker_log_cap = BlockerLogCap::Matched;
@@ -435,10 +436,16 @@ fn settings_label(g: &GiSettings) -> String {
     let d = GiSettings::default();
     let blockers = if (g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading, g.blocker_log_cap)
         != (d.blocker_epsilon, d.blocker_ratio, d.blocker_exp, d.blocker_shading, d.blocker_log_cap)
+        || g.blocker_key_lights != d.blocker_key_lights
     {
         format!(
-            " ε={} ratio={} exp={} {} cap={}",
-            g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading, g.blocker_log_cap
+            " ε={} ratio={} exp={} {} cap={} keys={}",
+            g.blocker_epsilon,
+            g.blocker_ratio,
+            g.blocker_exp,
+            g.blocker_shading,
+            g.blocker_log_cap,
+            g.blocker_key_lights
         )
     } else {
         String::new()

@@ -76,8 +76,8 @@ struct hfgi_ShadePush {
     uint albedo_map;    // 1: per-texel albedo buffer
     float texel_size;
     uint accumulate;    // indirect mode: 1 adds this bounce to planes 2 and 5, 0 overwrites
-    float pad1;
-    float pad2;
+    uint sphere_count;  // sphere slots (binding 10: 2 vec4 per slot), for the key lights' shadows
+    uint key_overlap;   // 1: key lights shadowed by the exact cap overlap with the spheres
     vec4 camera;        // world position of the camera (xyz), high part
     vec4 specular;      // Phong k_s (rgb)
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0

@@ -27,7 +27,7 @@ const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
 layout(std430, binding = 1) readonly buffer Vis { float hfgi_vis[]; };           // sets × receivers × n²; U: receivers × n² × vec4
-layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };        // sets × n² (rgb)
+layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };        // sets × n² (rgb), then per set its cap (key light: dir, α)
 layout(std430, binding = 3) readonly buffer Triple { uvec2 hfgi_triple[]; };     // (i | j<<8 | k<<16, γ bits)
 layout(std430, binding = 4) readonly buffer Albedo { vec4 hfgi_albedo[]; };      // per texel (albedo_map)
 layout(std430, binding = 5) readonly buffer Consts {
@@ -40,6 +40,7 @@ layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  //
 layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's diffuse, glossy planes
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
 layout(std430, binding = 9) readonly buffer Blockers { float hfgi_bv[]; };     // receivers × n² (× 2 in log mode)
+layout(std430, binding = 10) readonly buffer BSpheres { vec4 hfgi_spheres[]; }; // per slot: (c_hi, r), (c_lo, 0)
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
@@ -66,6 +67,47 @@ vec3 normal_at(ivec2 p) {
     float hx = (height(wrap_or_clamp(x1, w), p.y) - height(wrap_or_clamp(x0, w), p.y)) / (dx * pc.texel_size);
     float hy = (height(p.x, wrap_or_clamp(y1, h)) - height(p.x, wrap_or_clamp(y0, h))) / (dy * pc.texel_size);
     return normalize(vec3(-hx, -hy, 1.0));
+}
+
+// Solid angle of the intersection of caps of angular radii a, b whose centres are g apart:
+// two sectors minus the kite, haversine and L'Huilier forms (small suns keep their digits).
+// Twin: math::overlap::cap_overlap.
+float hfgi_hav(float x) {
+    float s = sin(0.5 * x);
+    return s * s;
+}
+
+float hfgi_cap_overlap(float a, float b, float g) {
+    const float PI = 3.14159265358979;
+    if (g >= a + b) return 0.0;
+    if (g <= abs(a - b)) return 4.0 * PI * hfgi_hav(min(a, b));
+    if (a + b + g >= 2.0 * PI) return 4.0 * PI * (hfgi_hav(a) + hfgi_hav(b)) - 4.0 * PI;
+    float ha = clamp((hfgi_hav(b) - hfgi_hav(a - g)) / (sin(a) * sin(g)), 0.0, 1.0);
+    float hb = clamp((hfgi_hav(a) - hfgi_hav(b - g)) / (sin(b) * sin(g)), 0.0, 1.0);
+    float pa = 2.0 * asin(sqrt(ha)), pb = 2.0 * asin(sqrt(hb));
+    float s = 0.5 * (a + b + g);
+    float t = max(tan(0.5 * s), 0.0) * max(tan(0.5 * (s - a)), 0.0) * max(tan(0.5 * (s - b)), 0.0) * max(tan(0.5 * (s - g)), 0.0);
+    float e = 4.0 * atan(sqrt(t));
+    return max(4.0 * pa * hfgi_hav(a) + 4.0 * pb * hfgi_hav(b) - 2.0 * e, 0.0);
+}
+
+// The fraction of the key light's cap (unit dir, angular radius alpha) that the spheres leave
+// open from P: Π_i (1 − Ω(light ∩ sphere_i)/Ω_light), 0 inside a sphere.
+// Twin: math::overlap::unoccluded_fraction.
+float hfgi_key_open(vec3 P, vec3 dir, float alpha) {
+    float light = 12.566370614359172 * hfgi_hav(alpha);
+    float t = 1.0;
+    for (uint i = 0u; i < pc.sphere_count; ++i) {
+        vec4 c_hi = hfgi_spheres[2u * i], c_lo = hfgi_spheres[2u * i + 1u];
+        float rad = c_hi.w;
+        if (rad <= 0.0) continue;
+        precise vec3 C = (c_hi.xyz - P) + c_lo.xyz;
+        float d = length(C);
+        if (d <= rad) return 0.0;
+        float g = atan(length(cross(C, dir)), dot(C, dir));
+        t *= 1.0 - min(hfgi_cap_overlap(alpha, asin(rad / d), g) / light, 1.0);
+    }
+    return t;
 }
 
 vec3 hfgi_T[HFGI_N2];
@@ -102,10 +144,13 @@ void main() {
     float w00 = (1.0 - f.x) * (1.0 - f.y), w10 = f.x * (1.0 - f.y), w01 = (1.0 - f.x) * f.y, w11 = f.x * f.y;
     uint receivers = pc.work_width * pc.work_height;
 
+    vec3 K[HFGI_N2]; // key lights shadowed by the cap overlap (not multiplied by V_s)
     for (int k = 0; k < HFGI_N2; ++k) {
         hfgi_T[k] = vec3(0.0);
         hfgi_T2[k] = vec3(0.0);
+        K[k] = vec3(0.0);
     }
+    vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
     if (HFGI_INDIRECT != 0) {
         // Incident indirect radiance: U of eq. 21, bilinear from the receiver grid.
         for (int k = 0; k < HFGI_N2; ++k) {
@@ -126,12 +171,17 @@ void main() {
         uint lbase = s * uint(HFGI_N2);
         bool combined = HFGI_BLOCKERS >= 2u && s == 0u; // log modes: the environment's own vector
         if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+        // A key light with gi.blocker_key_lights = "overlap": scaled by the fraction of its cap
+        // the spheres leave open, and kept out of the product with V_s.
+        vec4 cap = hfgi_light[pc.set_count * uint(HFGI_N2) + s];
+        bool key = HFGI_BLOCKERS != 0u && pc.key_overlap != 0u && cap.w > 0.0;
+        float open = key ? hfgi_key_open(P, cap.xyz, cap.w) : 1.0;
         // T_k += Σ_ij Γ_ijk L_i V_j (every ordered (i, j, k) is stored).
         for (uint e = 0u; e < hfgi_triple_count; ++e) {
             uvec2 t = hfgi_triple[e];
             uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
             vec3 add = uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light[lbase + i].rgb;
-            if (combined) hfgi_T2[k] += add; else hfgi_T[k] += add;
+            if (combined) hfgi_T2[k] += add; else if (key) K[k] += open * add; else hfgi_T[k] += add;
         }
     }
     if (HFGI_BLOCKERS != 0u) {
@@ -145,7 +195,7 @@ void main() {
             uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
             W[k] += uintBitsToFloat(t.y) * hfgi_VS[j] * hfgi_T[i];
         }
-        for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] = W[k];
+        for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] = W[k] + K[k];
     }
 
     // Diffuse: E = Σ_k T_k c_k with c the clamped cosine ZH rotated to N.
@@ -172,7 +222,6 @@ void main() {
 
     vec3 glossy = vec3(0.0);
     if (pc.glossy != 0u) {
-        vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
         // (camera − P) + camera_lo: the high part cancels exactly against P near the surface,
         // the low part restores the camera's f64 position (docs/hard-cases.md).
         precise vec3 rel = (pc.camera.xyz - P) + pc.camera_lo.xyz;

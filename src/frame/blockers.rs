@@ -21,7 +21,9 @@ use super::visibility::VisibilityPass;
 use crate::error::Result;
 use crate::math::shexp::{self, SphereQuadrature};
 use crate::rules::lighting::SetKind;
-use crate::scene::model::{BlockerExp, BlockerLogCap, BlockerShading, Scene, SphereBlocker, LOG_BRDF_EPSILON};
+use crate::scene::model::{
+    BlockerExp, BlockerKeyLights, BlockerLogCap, BlockerShading, Scene, SphereBlocker, LOG_BRDF_EPSILON,
+};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
@@ -129,6 +131,12 @@ fn consts_data(n: usize, matched: bool) -> Vec<f32> {
         }));
     }
     out
+}
+
+/// Key lights are shadowed by the exact cap overlap (`gi.blocker_key_lights = "overlap"`, with
+/// spheres), not by the product with `V_s`.
+pub(crate) fn key_overlap(scene: &Scene) -> bool {
+    !scene.spheres.is_empty() && scene.gi.blocker_key_lights == BlockerKeyLights::Overlap
 }
 
 /// The log modes use the matched log-ZH (not with `primal`, which has no logs).
@@ -294,6 +302,11 @@ impl BlockerPass {
             self.pipeline.dispatch(ctx, cmd, self.descriptors, bytemuck::bytes_of(&self.push), g);
             barrier::compute_to_compute(ctx, cmd);
         });
+    }
+
+    /// The sphere slots (binding 10 of the shading shader: the key lights' shadows).
+    pub fn spheres(&self) -> &Buffer {
+        &self.buffers[0]
     }
 
     /// The visibility vectors (binding 9 of the shading shader).

@@ -226,7 +226,7 @@ impl IndirectPass {
             let sh = ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 10],
+                &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<ShadePush>() as u32,
                 &[(0, n as u32), (1, 1), (2, vector as u32), (3, super::blockers::shading_mode(scene))],
                 1,
@@ -245,6 +245,7 @@ impl IndirectPass {
                     Bind::Buffer(&bufs[BOUNCE]),
                     Bind::Buffer(&bufs[INCIDENT]),
                     Bind::Buffer(blockers.unwrap_or(output)), // unread without spheres
+                    Bind::Buffer(output),                     // the spheres: unread by the bounces
                 ],
             )?;
             Ok((scan_set, shade_set, push))

@@ -104,7 +104,7 @@ impl Renderer {
                 return Err(e);
             }
         };
-        let shade = match ShadePass::new(ctx, &pyramid, &visibility, blockers.as_ref().map(|b| b.output()), scene) {
+        let shade = match ShadePass::new(ctx, &pyramid, &visibility, blockers.as_ref(), scene) {
             Ok(s) => s,
             Err(e) => {
                 if let Some(b) = blockers {

@@ -88,12 +88,24 @@ pub(crate) struct ShadeData {
 }
 
 /// The `hfgi.shade.light` data of `sets` (in buffer order): each set's `n²` RGB lighting
-/// ([`set_lighting`]) as `vec4`s.
+/// ([`set_lighting`]) as `vec4`s, then per set its cap — a key light's unit direction and
+/// angular radius (`w > 0`), zeros for the environment — for the spheres' key-light shadows
+/// (`gi.blocker_key_lights = "overlap"`).
 pub(crate) fn light_data(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Vec<[f32; 4]> {
-    sets.iter()
+    let mut out: Vec<[f32; 4]> = sets
+        .iter()
         .flat_map(|(k, set)| set_lighting(scene, *k, set))
         .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
-        .collect()
+        .collect();
+    out.extend(sets.iter().map(|(k, _)| match k {
+        SetKind::KeyLight(i) => {
+            let l = &scene.key_lights[*i];
+            let d = l.direction.normalize();
+            [d.x as f32, d.y as f32, d.z as f32, l.angular_radius as f32]
+        }
+        SetKind::Environment => [0.0; 4],
+    }));
+    out
 }
 
 impl ShadePush {
@@ -162,7 +174,7 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
     };
     let triples = triple::triple(n).entries.len();
     [
-        ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * n * n * 16)),
+        ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * (n * n + 1) * 16)),
         ("hfgi.shade.triple", upload_bytes(triples * 8)),
         ("hfgi.shade.albedo", upload_bytes(albedo * 16)),
         ("hfgi.shade.consts", upload_bytes(constants(n, scene.material.exponent as f64, triples as u32).len() * 4)),
@@ -205,13 +217,13 @@ pub struct ShadePass {
 }
 
 impl ShadePass {
-    /// `blockers`: the sphere blockers' visibility buffer (`visibility.blockers`), when the
-    /// scene has spheres.
+    /// `blockers`: the sphere blockers' pass (its visibility buffer and its spheres, for the
+    /// key lights' shadows), when the scene has spheres.
     pub fn new(
         ctx: &Context,
         pyramid: &HeightPyramid,
         vis: &VisibilityPass,
-        blockers: Option<&Buffer>,
+        blockers: Option<&super::blockers::BlockerPass>,
         scene: &Scene,
     ) -> Result<Self> {
         let n = scene.gi.sh_order;
@@ -242,7 +254,7 @@ impl ShadePass {
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 10],
+                &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<ShadePush>() as u32,
                 &[(0, n as u32), (1, 0), (2, store_t as u32), (3, super::blockers::shading_mode(scene))],
                 1,
@@ -259,7 +271,8 @@ impl ShadePass {
                     Bind::Buffer(&bufs[4]),
                     Bind::Buffer(&bufs[4]), // bounce output: unused by the direct mode
                     Bind::Buffer(&bufs[5]),
-                    Bind::Buffer(blockers.unwrap_or(&bufs[4])), // unread without spheres
+                    Bind::Buffer(blockers.map_or(&bufs[4], |b| b.output())), // unread without spheres
+                    Bind::Buffer(blockers.map_or(&bufs[4], |b| b.spheres())),
                 ],
             )
         })();
@@ -284,6 +297,8 @@ impl ShadePass {
             set_count: vis.set_count() as u32,
             wrap: scene.wrap as u32,
             texel_size: scene.texel_size as f32,
+            sphere_count: scene.spheres.len() as u32,
+            key_overlap: super::blockers::key_overlap(scene) as u32,
             ..Default::default()
         };
         push.set_camera(scene.camera.position);

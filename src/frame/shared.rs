@@ -210,7 +210,10 @@ pub struct ShadePush {
     pub texel_size: f32,
     /// Indirect mode: 1 adds the bounce to the indirect planes, 0 overwrites them.
     pub accumulate: u32,
-    pub pad: [f32; 2],
+    /// Sphere slots (binding 10), for the key lights' shadows.
+    pub sphere_count: u32,
+    /// 1: key lights are shadowed by the exact cap overlap with the spheres (`gi.blocker_key_lights`).
+    pub key_overlap: u32,
     /// Camera position, split as `camera + camera_lo` (two f32 per coordinate, the f64
     /// position to ~48 bits) so that the view vector `(camera − P) + camera_lo` keeps its
     /// precision when the heights are far from 0 (docs/hard-cases.md).
@@ -463,6 +466,8 @@ mod layout_against_glsl {
             albedo_map,
             texel_size,
             accumulate,
+            sphere_count,
+            key_overlap,
             camera,
             specular,
             albedo,

@@ -11,6 +11,7 @@ pub mod elevation;
 pub mod legendre;
 pub mod logcap;
 pub mod nlp;
+pub mod overlap;
 pub mod quadrature;
 pub mod sh;
 pub mod shexp;

@@ -340,6 +340,16 @@ impl Lobes {
     }
 }
 
+/// The fraction of key light `i`'s cap the spheres leave open at texel `(x, y)`
+/// ([`crate::math::overlap::unoccluded_fraction`]; docs/blockers.md §3).
+fn key_open(scene: &Scene, x: usize, y: usize, i: usize) -> f64 {
+    let s = scene.texel_size;
+    let p = DVec3::new(x as f64 * s, y as f64 * s, f64::from(scene.field.get(x, y)));
+    let spheres: Vec<([f64; 3], f64)> = scene.spheres.iter().map(|b| ((b.center - p).to_array(), b.radius)).collect();
+    let l = &scene.key_lights[i];
+    crate::math::overlap::unoccluded_fraction(l.direction.normalize().to_array(), l.angular_radius, &spheres)
+}
+
 /// The whole direct pipeline of docs/direct.md on the CPU.
 pub fn render_direct(scene: &Scene) -> Result<DirectOutput> {
     render_direct_with(scene, None)
@@ -401,6 +411,7 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
         super::blockers::blocker_visibility(scene, work, &normals, env)
     });
     let albedo = blockers.as_ref().and_then(|b| b.transfer.as_ref()).map(|_| super::truth::albedo(scene));
+    let overlap = scene.gi.blocker_key_lights == crate::scene::model::BlockerKeyLights::Overlap;
     let mut direct = Vec::with_capacity(w * h);
     let mut glossy = Vec::with_capacity(w * h);
     let mut incident = Vec::with_capacity(w * h);
@@ -410,21 +421,37 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
             // Incident radiance T = Σ_sets L ⊛ V (§6), V interpolated from the receiver grid.
             let mut tr = vec![[0.0f64; 3]; n * n];
             let mut tr_env = vec![[0.0f64; 3]; n * n];
+            let mut tr_key = vec![[0.0f64; 3]; n * n];
             for (si, (vis, light)) in visibility.iter().zip(&lighting).enumerate() {
                 let combined = blockers.as_ref().and_then(|b| b.environment.as_ref()).filter(|_| si == 0);
                 let v = interpolate(combined.unwrap_or(vis), work, xw, yw, scene.wrap);
-                let into = if combined.is_some() { &mut tr_env } else { &mut tr };
+                // gi.blocker_key_lights = "overlap": a key light scaled by the fraction of its
+                // cap the spheres leave open, outside the product with V_s.
+                let open = match sets[si].0 {
+                    SetKind::KeyLight(i) if blockers.is_some() && overlap => Some(key_open(scene, x, y, i)),
+                    _ => None,
+                };
+                let into = if combined.is_some() {
+                    &mut tr_env
+                } else if open.is_some() {
+                    &mut tr_key
+                } else {
+                    &mut tr
+                };
+                let scale = open.unwrap_or(1.0);
                 for ch in 0..3 {
                     let l: Vec<f64> = light.iter().map(|c| c[ch]).collect();
                     for (k, val) in triple::product(&t, &l, &v).into_iter().enumerate() {
-                        into[k][ch] += val;
+                        into[k][ch] += scale * val;
                     }
                 }
             }
             if let Some(b) = &blockers {
                 let vs = interpolate(&b.spheres, work, xw, yw, scene.wrap);
                 tr = super::blockers::times(&t, &tr, &vs);
-                tr.iter_mut().zip(&tr_env).for_each(|(a, e)| *a = [a[0] + e[0], a[1] + e[1], a[2] + e[2]]);
+                for (a, (e, k)) in tr.iter_mut().zip(tr_env.iter().zip(&tr_key)) {
+                    *a = [a[0] + e[0] + k[0], a[1] + e[1] + k[1], a[2] + e[2] + k[2]];
+                }
             }
             let (mut d, g) = lobes.shade(scene, x, y, normals[y * w + x], &tr);
             if let Some(t3) = blockers.as_ref().and_then(|b| b.transfer.as_ref()) {

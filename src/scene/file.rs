@@ -322,6 +322,7 @@ struct RawGi {
     blocker_exp: Option<String>,
     blocker_shading: Option<String>,
     blocker_log_cap: Option<String>,
+    blocker_key_lights: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -1105,6 +1106,7 @@ impl Ctx<'_> {
             blocker_exp: parse_opt(&raw.blocker_exp).map_err(param)?.unwrap_or(d.blocker_exp),
             blocker_shading: parse_opt(&raw.blocker_shading).map_err(param)?.unwrap_or(d.blocker_shading),
             blocker_log_cap: parse_opt(&raw.blocker_log_cap).map_err(param)?.unwrap_or(d.blocker_log_cap),
+            blocker_key_lights: parse_opt(&raw.blocker_key_lights).map_err(param)?.unwrap_or(d.blocker_key_lights),
         };
         gi.validate().map_err(param)?;
         Ok(gi)

@@ -220,6 +220,18 @@ settings_enum!(
 );
 
 settings_enum!(
+    /// How sphere blockers shadow key lights (`gi.blocker_key_lights`, docs/blockers.md §3).
+    BlockerKeyLights, "gi.blocker_key_lights", "`overlap` or `product`", {
+        /// Per texel, the fraction of each key light's cap the spheres leave open (the exact
+        /// solid angle of cap–cap overlap, `math::overlap`): sharp shadows.
+        Overlap = "overlap",
+        /// The key light's incident radiance times the spheres' order-n visibility `V_s` (an
+        /// SH product): order-n soft shadows.
+        Product = "product",
+    }
+);
+
+settings_enum!(
     /// Which log-ZH stands for a sphere blocker's cap in the log modes (`gi.blocker_log_cap`,
     /// docs/blockers.md §2).
     BlockerLogCap, "gi.blocker_log_cap", "`epsilon` or `matched`", {
@@ -348,6 +360,8 @@ pub struct GiSettings {
     pub blocker_shading: BlockerShading,
     /// Sphere blockers, log modes: the spheres' log-ZH (seed 001's `ε` form or moment-matched).
     pub blocker_log_cap: BlockerLogCap,
+    /// Sphere blockers: key lights shadowed by the exact cap overlap or the SH product.
+    pub blocker_key_lights: BlockerKeyLights,
 }
 
 impl Default for GiSettings {
@@ -412,6 +426,7 @@ impl GiSettings {
             blocker_exp: BlockerExp::Quadrature,
             blocker_shading: BlockerShading::Primal,
             blocker_log_cap: BlockerLogCap::Epsilon,
+            blocker_key_lights: BlockerKeyLights::Overlap,
         }
     }
 
@@ -426,6 +441,7 @@ impl GiSettings {
             blocker_exp: self.blocker_exp,
             blocker_shading: self.blocker_shading,
             blocker_log_cap: self.blocker_log_cap,
+            blocker_key_lights: self.blocker_key_lights,
             pyramid: self.pyramid,
             glossy_pyramid: self.glossy_pyramid,
             amortize: self.amortize,
@@ -442,7 +458,7 @@ impl GiSettings {
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
              radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} sweep_near={} key_light_azimuths={} bounces={} \
-             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={}",
+             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -470,7 +486,8 @@ impl GiSettings {
             self.blocker_ratio,
             self.blocker_exp,
             self.blocker_shading,
-            self.blocker_log_cap
+            self.blocker_log_cap,
+            self.blocker_key_lights
         )
     }
 
