@@ -25,6 +25,10 @@ pub const PLANES: u32 = 6;
 /// (`math::shexp::OL_POINTS`, checked equal there).
 pub const OL_POINTS: u32 = 49;
 
+/// Gauss–Legendre nodes in elevation for the Phong lobe over a local light's visible window
+/// on each azimuth slice (`shade.local_lights`' glossy light).
+pub const LOCAL_GLOSSY_NODES: u32 = 6;
+
 /// Intervals of the moment-matched log-ZH table in `u = 1 − cos Θ` (`math::logcap`).
 pub const MATCHED_INTERVALS: u32 = 256;
 /// With the matched log-ZH a receiver inside a sphere gets the constant log `−MATCHED_BLOCKED`
@@ -46,5 +50,6 @@ pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
     ("PLANES", PLANES, true),
     ("OL_POINTS", OL_POINTS, false),
     ("MATCHED_INTERVALS", MATCHED_INTERVALS, false),
+    ("LOCAL_GLOSSY_NODES", LOCAL_GLOSSY_NODES, true),
     ("MATCHED_BLOCKED", MATCHED_BLOCKED, false),
 ];

@@ -85,7 +85,7 @@ struct hfgi_ShadePush {
 };
 
 // Push constants of the local lights' shading (glsl/shade/local.comp.glsl,
-// docs/local-lights.md). 48 bytes.
+// docs/local-lights.md). 96 bytes.
 struct hfgi_LocalPush {
     uint width;         // full resolution
     uint height;
@@ -93,9 +93,12 @@ struct hfgi_LocalPush {
     uint azimuths;      // gi.local_light_azimuths: azimuth samples per light and receiver
     float texel_size;
     uint albedo_map;    // 1: per-texel albedo buffer
-    uint pad0;
-    uint pad1;
+    uint glossy;        // 1: the material has a Phong lobe
+    float exponent;     // Phong exponent S
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
+    vec4 specular;      // Phong k_s (rgb)
+    vec4 camera;        // the camera (glossy view vector), high f32 part
+    vec4 camera_lo;     // … and the low part
 };
 
 // Push constants of the sphere blockers' visibility (glsl/visibility/blockers.comp.glsl,

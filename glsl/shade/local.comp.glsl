@@ -8,7 +8,9 @@
 // (eq. 4.24: nothing behind the light shadows it; the horizon may be below zero, eq. 4.23) —
 // and above the tangent elevation, and the clamped cosine is integrated over it in closed
 // form. The diffuse exit radiance ρ/π · Σ_lights L · E_l is added to the direct and total
-// planes that shade.direct has just written (the indirect bounces then carry it).
+// planes that shade.direct has just written (the indirect bounces then carry it); on a glossy
+// surface k_s · Σ_lights L · G_l — the normalised Phong lobe about the reflected view vector
+// integrated over the same visible windows (Gauss–Legendre in elevation) — to the glossy ones.
 // Twin: reference::local::local_exitance.
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
@@ -49,9 +51,23 @@ float slice(float h, float nz, float a, float b) {
     return 0.5 * h * ((b - a) + sb * cb - sa * ca) + 0.5 * nz * (sb * sb - sa * sa);
 }
 
-// Irradiance E / L of one light (centre C relative to the texel, radius r) at texel p, normal N,
-// surface height `base` at p (what the horizon slopes are measured from).
-float light_irradiance(vec2 p, float base, vec3 N, vec3 C, float r) {
+// ∫_a^b lobe(u(ω)·R) cos ω dω on the half-plane of azimuth d, the normalised Phong lobe
+// (S+1)/(2π) max(cos, 0)^S, by LOCAL_GLOSSY_NODES Gauss–Legendre nodes (after the azimuths').
+float glossy_slice(vec2 d, vec3 R, float a, float b) {
+    float hw = 0.5 * (b - a), mid = 0.5 * (a + b), g = 0.0;
+    for (uint j = 0u; j < HFGI_LOCAL_GLOSSY_NODES; ++j) {
+        vec2 node = hfgi_nodes[pc.azimuths + j];
+        float om = mid + hw * node.x;
+        vec3 u = vec3(cos(om) * d, sin(om));
+        g += node.y * pow(max(dot(u, R), 0.0), pc.exponent) * cos(om);
+    }
+    return hw * g * (pc.exponent + 1.0) / (2.0 * HFGI_PI);
+}
+
+// (E, G) / L of one light (centre C relative to the texel, radius r) at texel p, normal N,
+// surface height `base` at p (what the horizon slopes are measured from): the irradiance and,
+// with pc.glossy, the Phong lobe about R integrated over the same visible part of the cap.
+vec2 light_irradiance(vec2 p, float base, vec3 N, vec3 R, vec3 C, float r) {
     float d = length(C);
     bool inside = d <= r;
     float sin_a = inside ? 1.0 : r / d;
@@ -61,7 +77,7 @@ float light_irradiance(vec2 p, float base, vec3 N, vec3 C, float r) {
     bool pole = cos_e <= sin_a;
     float phi_c = atan(l.y, l.x);
     float beta = pole ? 0.0 : asin(min(sin_a / cos_e, 1.0));
-    float E = 0.0;
+    float E = 0.0, G = 0.0;
     for (uint k = 0u; k < pc.azimuths; ++k) {
         float phi, w;
         if (pole) {
@@ -89,9 +105,12 @@ float light_irradiance(vec2 p, float base, vec3 N, vec3 C, float r) {
         float best;
         if (reach > 0.0 && hfgi_field_slope(p, dir, reach, base, best))
             a = max(a, atan(best / pc.texel_size));
-        if (b > a) E += w * slice(h, N.z, a, b);
+        if (b > a) {
+            E += w * slice(h, N.z, a, b);
+            if (pc.glossy != 0u) G += w * glossy_slice(dir, R, a, b);
+        }
     }
-    return E;
+    return vec2(E, G);
 }
 
 void main() {
@@ -99,19 +118,33 @@ void main() {
     if (p.x >= int(pc.width) || p.y >= int(pc.height)) return;
     vec3 N = hfgi_field_normal(p);
     vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, hfgi_field_height(p.x, p.y));
-    vec3 E = vec3(0.0);
+    vec3 E = vec3(0.0), G = vec3(0.0);
     float base = hfgi_field_bilinear(vec2(p)); // once per texel, not per light and slice
+    // The reflected view vector (as shade.direct's: (camera − P) + camera_lo).
+    precise vec3 rel = (pc.camera.xyz - P) + pc.camera_lo.xyz;
+    vec3 wo = normalize(rel);
+    vec3 R = normalize(2.0 * dot(N, wo) * N - wo);
     for (uint i = 0u; i < pc.light_count; ++i) {
         vec4 c_hi = hfgi_lights[3u * i], c_lo = hfgi_lights[3u * i + 1u], L = hfgi_lights[3u * i + 2u];
         if (all(equal(L.rgb, vec3(0.0)))) continue;
         // (c_hi − P) + c_lo: the f64 centre relative to the texel, exact near the surface.
         precise vec3 C = (c_hi.xyz - P) + c_lo.xyz;
-        E += L.rgb * light_irradiance(vec2(p), base, N, C, c_hi.w);
+        vec2 eg = light_irradiance(vec2(p), base, N, R, C, c_hi.w);
+        E += L.rgb * eg.x;
+        G += L.rgb * eg.y;
     }
     vec3 rho = pc.albedo_map != 0u ? hfgi_albedo[uint(p.y) * pc.width + uint(p.x)].rgb : pc.albedo.rgb;
     vec3 add = rho * E * 0.31830988618379067;
     uint plane = pc.width * pc.height, idx = uint(p.y) * pc.width + uint(p.x);
     uint at_direct = HFGI_PLANE_DIRECT * plane + idx, at_total = HFGI_PLANE_TOTAL * plane + idx;
     hfgi_out[at_direct] = vec4(hfgi_out[at_direct].rgb + add, 1.0);
-    hfgi_out[at_total] = vec4(hfgi_out[at_total].rgb + add, 1.0);
+    vec3 gl = pc.glossy != 0u ? pc.specular.rgb * G : vec3(0.0);
+    if (pc.glossy != 0u) {
+        // The glossy light joins the direct glossy plane and the glossy layer (shade.direct
+        // recomposes them from planes 4 and 5, so later bounces keep it).
+        uint at_gd = HFGI_PLANE_GLOSSY_DIRECT * plane + idx, at_g = HFGI_PLANE_GLOSSY * plane + idx;
+        hfgi_out[at_gd] = vec4(hfgi_out[at_gd].rgb + gl, 1.0);
+        hfgi_out[at_g] = vec4(hfgi_out[at_g].rgb + gl, 1.0);
+    }
+    hfgi_out[at_total] = vec4(hfgi_out[at_total].rgb + add + gl, 1.0);
 }

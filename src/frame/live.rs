@@ -364,6 +364,9 @@ impl Renderer {
         camera.check()?;
         self.live.scene.camera = camera.clone();
         self.shade.push_mut().set_camera(camera.position);
+        if let Some(l) = self.local.as_mut() {
+            l.push_mut().set_camera(camera.position);
+        }
         let spec = self.live.scene.material.specular.unwrap_or([0.0; 3]);
         if let Some(b) = self.blockers.as_mut().filter(|b| b.view_dependent()) {
             // log_brdf: the glossy transfer's view vector (docs/blockers.md §3).

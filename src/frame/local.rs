@@ -52,10 +52,12 @@ pub(crate) fn light_data(lights: &[LocalLight]) -> Vec<[f32; 4]> {
     out
 }
 
-/// The [`NODES_BUFFER`] data: `k` Gauss–Legendre `(x, w)` pairs on `[−1, 1]`.
+/// The [`NODES_BUFFER`] data: `k` Gauss–Legendre `(x, w)` pairs on `[−1, 1]` (the azimuths),
+/// then the [`crate::constants::LOCAL_GLOSSY_NODES`] ones (the glossy lobe in elevation).
 fn node_data(k: u32) -> Vec<[f32; 2]> {
     let (x, w) = gauss_legendre(k as usize);
-    x.iter().zip(&w).map(|(x, w)| [*x as f32, *w as f32]).collect()
+    let (gx, gw) = gauss_legendre(crate::constants::LOCAL_GLOSSY_NODES as usize);
+    x.iter().chain(&gx).zip(w.iter().chain(&gw)).map(|(x, w)| [*x as f32, *w as f32]).collect()
 }
 
 /// The buffers `(name, bytes)` the pass creates, in creation order (also for
@@ -65,7 +67,7 @@ pub(crate) fn buffer_sizes(scene: &Scene) -> Vec<(&'static str, u64)> {
         return Vec::new();
     }
     let lights = (scene.local_lights.len() * VEC4S_PER_LIGHT * 16) as u64;
-    let nodes = (scene.gi.local_light_azimuths as usize * 8) as u64;
+    let nodes = ((scene.gi.local_light_azimuths + crate::constants::LOCAL_GLOSSY_NODES) as usize * 8) as u64;
     vec![(LIGHTS_BUFFER, lights), (NODES_BUFFER, nodes)]
 }
 
@@ -76,6 +78,19 @@ impl LocalPush {
             Albedo::Map(_) => (self.albedo_map, self.albedo) = (1, [0.0; 4]),
             Albedo::Constant(a) => (self.albedo_map, self.albedo) = (0, [a[0], a[1], a[2], 0.0]),
         }
+        let ks = m.specular.unwrap_or([0.0; 3]);
+        self.glossy = m.specular.is_some() as u32;
+        self.exponent = m.exponent;
+        self.specular = [ks[0], ks[1], ks[2], 0.0];
+    }
+
+    /// The camera (the glossy view vector), as a high and a low f32 (as `ShadePush`).
+    pub(crate) fn set_camera(&mut self, position: glam::DVec3) {
+        let cam = position.to_array();
+        let hi = cam.map(|v| v as f32);
+        let lo = [0, 1, 2].map(|i| (cam[i] - f64::from(hi[i])) as f32);
+        self.camera = [hi[0], hi[1], hi[2], 0.0];
+        self.camera_lo = [lo[0], lo[1], lo[2], 0.0];
     }
 }
 
@@ -146,6 +161,7 @@ impl LocalLightPass {
             ..Default::default()
         };
         push.set_material(&scene.material);
+        push.set_camera(scene.camera.position);
         Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, lights, nodes, push })
     }
 

@@ -157,8 +157,17 @@ pub struct LocalPush {
     pub azimuths: u32,
     pub texel_size: f32,
     pub albedo_map: u32,
-    pub pad: [u32; 2],
+    /// 1: the material has a Phong lobe (glossy light of the local lights).
+    pub glossy: u32,
+    /// Phong exponent S.
+    pub exponent: f32,
     pub albedo: [f32; 4],
+    /// Phong `k_s` (rgb).
+    pub specular: [f32; 4],
+    /// The camera (the glossy view vector), high f32 part …
+    pub camera: [f32; 4],
+    /// … and the low part (`camera + camera_lo` = the f64 position).
+    pub camera_lo: [f32; 4],
 }
 
 /// `hfgi_BlockerPush`: push constants of the sphere blockers' visibility (`visibility.blockers`).
@@ -365,7 +374,7 @@ const _: () = assert!(std::mem::size_of::<TruthPush>() == 128);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
-const _: () = assert!(std::mem::size_of::<LocalPush>() == 48);
+const _: () = assert!(std::mem::size_of::<LocalPush>() == 96);
 const _: () = assert!(std::mem::size_of::<BlockerPush>() == 112);
 const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);
@@ -490,7 +499,20 @@ mod layout_against_glsl {
             camera_lo,
             log_phong
         });
-        layout!(LocalPush { width, height, light_count, azimuths, texel_size, albedo_map, albedo });
+        layout!(LocalPush {
+            width,
+            height,
+            light_count,
+            azimuths,
+            texel_size,
+            albedo_map,
+            glossy,
+            exponent,
+            albedo,
+            specular,
+            camera,
+            camera_lo
+        });
         layout!(IndirectPush {
             work_width,
             work_height,

@@ -485,6 +485,9 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     for (d, l) in direct.iter_mut().zip(super::local::local_exitance(scene, &normals)) {
         *d = [d[0] + l[0], d[1] + l[1], d[2] + l[2]];
     }
+    for (g, l) in glossy.iter_mut().zip(super::local::local_glossy(scene, &normals)) {
+        *g = [g[0] + l[0], g[1] + l[1], g[2] + l[2]];
+    }
     let total = direct.iter().zip(&glossy).map(|(d, g)| [d[0] + g[0], d[1] + g[1], d[2] + g[2]]).collect();
     Ok(DirectOutput {
         width: w,

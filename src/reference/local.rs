@@ -26,9 +26,40 @@ pub fn slice(h: f64, nz: f64, a: f64, b: f64) -> f64 {
     0.5 * h * ((b - a) + sb * cb - sa * ca) + 0.5 * nz * (sb * sb - sa * sa)
 }
 
+/// `∫_a^b lobe(u(ω)·R) cos ω dω` on the half-plane of azimuth direction `d`, the normalised
+/// Phong lobe `(S+1)/(2π) max(cos, 0)^S`, by [`crate::constants::LOCAL_GLOSSY_NODES`]
+/// Gauss–Legendre nodes (as the shader).
+pub fn glossy_slice(d: [f64; 2], refl: DVec3, s: f64, a: f64, b: f64) -> f64 {
+    let (x, w) = crate::math::quadrature::gauss_legendre(crate::constants::LOCAL_GLOSSY_NODES as usize);
+    let (hw, mid) = (0.5 * (b - a), 0.5 * (a + b));
+    let g: f64 = x
+        .iter()
+        .zip(&w)
+        .map(|(x, w)| {
+            let om = mid + hw * x;
+            let u = DVec3::new(om.cos() * d[0], om.cos() * d[1], om.sin());
+            w * u.dot(refl).max(0.0).powf(s) * om.cos()
+        })
+        .sum();
+    hw * g * (s + 1.0) / (2.0 * PI)
+}
+
 /// `E / L` of one light at texel `(x, y)` with normal `nrm`: the cosine-weighted solid angle
 /// of the part of its cap that the height field leaves open (see the module docs).
 pub fn light_irradiance(scene: &Scene, x: usize, y: usize, nrm: [f64; 3], light: &LocalLight) -> f64 {
+    light_terms(scene, x, y, nrm, light, None).0
+}
+
+/// `(E, G) / L` of one light: [`light_irradiance`] and, with `lobe = (R, S)`, the Phong lobe
+/// about `R` integrated over the same visible windows ([`glossy_slice`]).
+pub fn light_terms(
+    scene: &Scene,
+    x: usize,
+    y: usize,
+    nrm: [f64; 3],
+    light: &LocalLight,
+    lobe: Option<(DVec3, f64)>,
+) -> (f64, f64) {
     let field = &scene.field;
     let s = scene.texel_size;
     let p = DVec3::new(x as f64 * s, y as f64 * s, f64::from(field.get(x, y)));
@@ -39,7 +70,7 @@ pub fn light_irradiance(scene: &Scene, x: usize, y: usize, nrm: [f64; 3], light:
     let cos_a = if inside { 0.0 } else { ((d - r) * (d + r)).sqrt() / d };
     let l = c / d;
     let n = [field.width() as f64, field.height() as f64];
-    let mut e = 0.0;
+    let (mut e, mut g) = (0.0, 0.0);
     for (phi, w) in cap_azimuths_toward(l, sin_a, scene.gi.local_light_azimuths, scene.gi.local_light_azimuths) {
         let dir = [phi.cos(), phi.sin()];
         let Some((lo, hi)) = cap_window(dir, l.to_array(), sin_a, cos_a) else { continue };
@@ -63,9 +94,41 @@ pub fn light_irradiance(scene: &Scene, x: usize, y: usize, nrm: [f64; 3], light:
         }
         if b > a {
             e += w * slice(h, nrm[2], a, b);
+            if let Some((r, s)) = lobe {
+                g += w * glossy_slice(dir, r, s, a, b);
+            }
         }
     }
-    e
+    (e, g)
+}
+
+/// The local lights' glossy exit radiance `k_s ⊙ Σ L·G` per texel (row-major; zero without a
+/// Phong lobe), what `shade.local_lights` adds to the glossy layer: the lobe about the
+/// reflected view vector (toward the scene camera, as docs/direct.md §6).
+pub fn local_glossy(scene: &Scene, normals: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let mut out = vec![[0.0; 3]; w * h];
+    let Some(ks) = scene.material.specular.filter(|_| !scene.local_lights.is_empty()) else { return out };
+    let s = f64::from(scene.material.exponent);
+    for y in 0..h {
+        for x in 0..w {
+            let nrm = normals[y * w + x];
+            let t = scene.texel_size;
+            let p = DVec3::new(x as f64 * t, y as f64 * t, f64::from(scene.field.get(x, y)));
+            let wo = (scene.camera.position - p).normalize();
+            let nv = DVec3::from_array(nrm);
+            let r = (2.0 * nv.dot(wo) * nv - wo).normalize();
+            let mut g = [0.0; 3];
+            for light in scene.local_lights.iter().filter(|l| l.radiance.iter().any(|v| *v != 0.0)) {
+                let k = light_terms(scene, x, y, nrm, light, Some((r, s))).1;
+                for (gc, l) in g.iter_mut().zip(&light.radiance) {
+                    *gc += l * k;
+                }
+            }
+            out[y * w + x] = [0, 1, 2].map(|ch| f64::from(ks[ch]) * g[ch]);
+        }
+    }
+    out
 }
 
 /// The local lights' diffuse exit radiance `ρ/π · Σ L·E` per texel (row-major), what
