@@ -303,28 +303,10 @@ fn sun_shadow_of_a_sphere_against_the_exact_reference() {
 }
 
 /// The exact glossy exit radiance under a white sky of a flat receiver at `p` beside a sphere:
-/// `∫ lobe(ω·R) dω` over the upper hemisphere minus the sphere's directions, with the
-/// normalised Phong lobe `(S+1)/(2π) max(cos, 0)^S` about `R` (brute-force quadrature, 240
-/// Gauss–Legendre nodes in cos θ × 720 azimuths; independent of the pipeline's SH).
+/// `∫ lobe(ω·R) dω` over the upper hemisphere minus the sphere's directions (brute force,
+/// 240 × 720 directions; independent of the pipeline's SH).
 fn glossy_truth(p: DVec3, c: DVec3, r: f64, refl: DVec3, s: f64) -> f64 {
-    let (z, w) = hfgi::math::quadrature::gauss_legendre_on(0.0, 1.0, 240);
-    let nphi = 720;
-    let mut sum = 0.0;
-    for (ct, wt) in z.iter().zip(&w) {
-        let st = (1.0 - ct * ct).sqrt();
-        for k in 0..nphi {
-            let phi = (k as f64 + 0.5) * std::f64::consts::TAU / nphi as f64;
-            let d = DVec3::new(st * phi.cos(), st * phi.sin(), *ct);
-            let oc = c - p;
-            let along = oc.dot(d);
-            if along > 0.0 && (oc - along * d).length() < r {
-                continue;
-            }
-            let cosr = d.dot(refl).max(0.0);
-            sum += wt * std::f64::consts::TAU / nphi as f64 * (s + 1.0) / std::f64::consts::TAU * cosr.powf(s);
-        }
-    }
-    sum
+    common::scenes::lobe_integral(refl, s, 240, 720, |d| !common::scenes::hits_sphere(p, d, c, r))
 }
 
 /// Glossy light beside a sphere over a flat field (white sky, k_s = 1) against the exact

@@ -154,23 +154,8 @@ fn glossy_on_a_flat_field_against_the_exact_integral() {
     s.material.specular = Some([1.0; 3]);
     s.camera.position = DVec3::new(40.0, 16.0, 10.0);
     let exact = |p: DVec3, refl: DVec3, sexp: f64| -> f64 {
-        let (z, w) = hfgi::math::quadrature::gauss_legendre_on(0.0, 1.0, 400);
-        let nphi = 1600;
-        let mut sum = 0.0;
-        for (ct, wt) in z.iter().zip(&w) {
-            let st = (1.0 - ct * ct).sqrt();
-            for k in 0..nphi {
-                let phi = (k as f64 + 0.5) * std::f64::consts::TAU / nphi as f64;
-                let d = DVec3::new(st * phi.cos(), st * phi.sin(), *ct);
-                let oc = light.position - p;
-                let along = oc.dot(d);
-                if along > 0.0 && (oc - along * d).length() < light.radius {
-                    let lobe = (sexp + 1.0) / std::f64::consts::TAU * d.dot(refl).max(0.0).powf(sexp);
-                    sum += wt * std::f64::consts::TAU / nphi as f64 * lobe;
-                }
-            }
-        }
-        10.0 * sum
+        let hit = |d: DVec3| common::scenes::hits_sphere(p, d, light.position, light.radius);
+        10.0 * common::scenes::lobe_integral(refl, sexp, 400, 1600, hit)
     };
     for (sexp, az) in [(8.0, 8), (8.0, 16), (32.0, 16)] {
         s.material.exponent = sexp as f32;

@@ -1170,13 +1170,18 @@ mod tests {
 pub fn log_diffuse_zh(n: usize, eps: f64) -> Vec<f64> {
     check_order(n);
     let knee = (PI * eps).min(1.0);
-    let g = |t: f64| if t <= knee { eps.ln() } else { (t / PI).ln() };
+    zonal_pieces(n, knee, 64, |t| if t <= knee { eps.ln() } else { (t / PI).ln() })
+}
+
+/// The order-`n` ZH `z_l = 2π ∫ g(t)·y_l^0(t) dt` of a zonal function smooth on `[−1, knee]` and
+/// on `[knee, 1]`, by `nodes` Gauss–Legendre nodes on each piece.
+fn zonal_pieces(n: usize, knee: f64, nodes: usize, g: impl Fn(f64) -> f64) -> Vec<f64> {
     let mut z = vec![0.0; n];
     for (a, b) in [(-1.0, knee), (knee, 1.0)] {
         if b <= a {
             continue;
         }
-        let (x, w) = crate::math::quadrature::gauss_legendre_on(a, b, 64);
+        let (x, w) = crate::math::quadrature::gauss_legendre_on(a, b, nodes);
         for (t, wt) in x.iter().zip(&w) {
             for (l, zl) in z.iter_mut().enumerate() {
                 let y = ((2 * l + 1) as f64 / (4.0 * PI)).sqrt() * crate::math::legendre::legendre(l, *t);
@@ -1202,21 +1207,7 @@ pub fn log_phong_zh(n: usize, s: f64, eps: f64) -> Vec<f64> {
     assert!(s > 0.0 && s.is_finite() && eps > 0.0 && eps.is_finite(), "log_phong_zh: S = {s}, ε = {eps}");
     let norm = (s + 1.0) / (2.0 * PI);
     let knee = (eps / norm).powf(1.0 / s).clamp(0.0, 1.0);
-    let g = |t: f64| if t <= knee { eps.ln() } else { norm.ln() + s * t.ln() };
-    let mut z = vec![0.0; n];
-    for (a, b) in [(-1.0, knee), (knee, 1.0)] {
-        if b <= a {
-            continue;
-        }
-        let (x, w) = crate::math::quadrature::gauss_legendre_on(a, b, 96);
-        for (t, wt) in x.iter().zip(&w) {
-            for (l, zl) in z.iter_mut().enumerate() {
-                let y = ((2 * l + 1) as f64 / (4.0 * PI)).sqrt() * crate::math::legendre::legendre(l, *t);
-                *zl += 2.0 * PI * wt * g(*t) * y;
-            }
-        }
-    }
-    z
+    zonal_pieces(n, knee, 96, |t| if t <= knee { eps.ln() } else { norm.ln() + s * t.ln() })
 }
 
 #[cfg(test)]

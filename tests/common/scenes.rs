@@ -86,3 +86,32 @@ pub fn single_fixes(
         ("elevation_basis=legendre".into(), with(&|g| g.elevation_basis = ElevationBasis::Legendre)),
     ]
 }
+
+/// `∫ lobe(ω·R) dω` over the upper hemisphere's directions `ω` for which `keep(ω)` holds, with
+/// the normalised Phong lobe `(S+1)/(2π) max(cos, 0)^S` about `refl`: brute force, `nz`
+/// Gauss–Legendre nodes in `cos θ` × `nphi` azimuths (independent of the pipeline's SH and
+/// slices; the glossy checks of tests/blockers.rs and tests/local_lights.rs).
+pub fn lobe_integral(refl: glam::DVec3, s: f64, nz: usize, nphi: usize, keep: impl Fn(glam::DVec3) -> bool) -> f64 {
+    let (z, w) = hfgi::math::quadrature::gauss_legendre_on(0.0, 1.0, nz);
+    let tau = std::f64::consts::TAU;
+    let mut sum = 0.0;
+    for (ct, wt) in z.iter().zip(&w) {
+        let st = (1.0 - ct * ct).sqrt();
+        for k in 0..nphi {
+            let phi = (k as f64 + 0.5) * tau / nphi as f64;
+            let d = glam::DVec3::new(st * phi.cos(), st * phi.sin(), *ct);
+            if keep(d) {
+                sum += wt * tau / nphi as f64 * (s + 1.0) / tau * d.dot(refl).max(0.0).powf(s);
+            }
+        }
+    }
+    sum
+}
+
+/// True when the ray from `p` along unit `d` meets the sphere of centre `c` and radius `r`
+/// ahead of `p`.
+pub fn hits_sphere(p: glam::DVec3, d: glam::DVec3, c: glam::DVec3, r: f64) -> bool {
+    let oc = c - p;
+    let along = oc.dot(d);
+    along > 0.0 && (oc - along * d).length() < r
+}
