@@ -87,6 +87,13 @@ uint hfgi_scan_level(int i, uint bias, int n_v) {
     return uint(clamp(i - int(bias), 0, n_v - 1));
 }
 
+// Levels a scan reads: sample i < s.end reads level clamp(i − bias, 0, n_v − 1), so levels
+// 0 … end − bias − 1 (at most n_v). A renderer's stack holds just these planes
+// (frame::pyramid::scan_stack_levels, the same formula): no other level may be read from it.
+int hfgi_scan_levels(hfgi_Scan s, int n_v) {
+    return clamp(s.end - int(s.level_bias), 1, n_v);
+}
+
 // `extent` = near_steps | far_steps << 16 (hfgi_VisibilityPush.scan_extent).
 hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias, float texel_size, bool stack_mode,
                           bool wrap, uint flags, uint extent, int n_v) {

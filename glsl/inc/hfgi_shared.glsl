@@ -20,7 +20,7 @@ struct hfgi_Level {
 
 // Push constants of the pyramid passes (decimate, synthesize, probe). 16 bytes.
 struct hfgi_PyramidPush {
-    uint level;     // decimate: level written; synthesize: unused (z = level); probe: mode
+    uint level;     // decimate: level written; synthesize: stack levels K | n_v << 16; probe: mode
     uint wrap;      // 1: periodic addressing, 0: clamp to edge
     uint out_width; // working resolution of the stack / probe query count; decimate: levels per channel
     uint out_height;
@@ -138,7 +138,7 @@ struct hfgi_IndirectPush {
     vec4 specular;        // Phong k_s (vector pyramid)
     uint sample_offset;   // first azimuth of this dispatch (frame::shared::azimuth_chunks)
     uint probes;          // gi.radial_probes
-    uint pad1;
+    uint radiance_planes; // radiance stack planes per channel (its finest levels; stack mode)
     uint pad2;
 };
 

@@ -135,14 +135,13 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
     int y0 = hfgi_address(i.y, size.y, wrap), y1 = hfgi_address(i.y + 1, size.y, wrap);
     uvec4 at = uvec4(y0 * size.x + x0, y0 * size.x + x1, y1 * size.x + x0, y1 * size.x + x1);
     for (uint c = 0u; c < 3u; ++c) {
-        uint e = c * n_u + lv;
         if (raw) {
             uvec4 k = at + hfgi_r0_offset[c];
             float b = hfgi_r0_bias[c];
             rad[c] = hfgi_bilerp(hfgi_radiance_levels[k.x] - b, hfgi_radiance_levels[k.y] - b,
                                  hfgi_radiance_levels[k.z] - b, hfgi_radiance_levels[k.w] - b, f);
         } else {
-            uvec4 k = at + e * work.x * work.y;
+            uvec4 k = at + (c * pc.radiance_planes + lv) * work.x * work.y; // lv < radiance_planes
             rad[c] = hfgi_bilerp(hfgi_radiance_stack[k.x], hfgi_radiance_stack[k.y], hfgi_radiance_stack[k.z],
                                  hfgi_radiance_stack[k.w], f);
         }
@@ -284,7 +283,10 @@ void main() {
     bool tangent = (HFGI_STATIC_FLAGS & HFGI_FLAG_TANGENT) != 0u;
     float bmin = 3.402823466e38;
     // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
-    [[dont_unroll]] for (int l = 0; l < HFGI_NV; ++l) {
+    // Only the levels the scan reads (the stack holds no others; hfgi_scan_levels): bmin is the
+    // lowest base a sample is compared with, which is all the max-pyramid bound needs.
+    int levels = hfgi_scan_levels(scan, HFGI_NV);
+    [[dont_unroll]] for (int l = 0; l < levels; ++l) {
         hfgi_base[l] = hfgi_scan_base(scan, uint(l));
         bmin = min(bmin, hfgi_base[l]);
     }

@@ -114,9 +114,12 @@ void main() {
                                      pc.texel_size, HFGI_STACK != 0u, HFGI_WRAP != 0u, HFGI_STATIC_FLAGS, pc.scan_extent,
                                      HFGI_NV);
     bool sweep = (HFGI_STATIC_FLAGS & HFGI_FLAG_SWEEP) != 0u;
-    if (!sweep)
+    if (!sweep) {
         // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
-        [[dont_unroll]] for (int l = 0; l < HFGI_NV; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+        // Only the levels the scan reads (the stack holds no others; hfgi_scan_levels).
+        int levels = hfgi_scan_levels(scan, HFGI_NV);
+        [[dont_unroll]] for (int l = 0; l < levels; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+    }
     bool samples_max = (HFGI_STATIC_FLAGS & HFGI_FLAG_HORIZON_SAMPLES) != 0u;
     uint receivers = pc.work_width * pc.work_height;
 

@@ -16,7 +16,7 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::pyramid::HeightPyramid;
+use super::pyramid::{HeightPyramid, PyramidLayout};
 use super::pyramid_max::{uses_max_bound, MaxPyramid};
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
@@ -70,6 +70,28 @@ impl ScanData {
         let ladder = scan_steps(gi, n_v);
         Self { samples, fold, ladder }
     }
+
+    /// The radiance level of every scan sample: [`radiance_levels`] of this ladder.
+    pub(crate) fn radiance_levels(&self, scene: &Scene) -> Result<Vec<u32>> {
+        radiance_levels(scene, &self.ladder)
+    }
+}
+
+/// The radiance level of every step of `ladder` (docs/indirect.md §2, computed in f64): what
+/// the scan uploads as `hfgi.indirect.radiance_level`.
+pub(crate) fn radiance_levels(scene: &Scene, ladder: &[f64]) -> Result<Vec<u32>> {
+    let gi = &scene.gi;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let n_u = PyramidLayout::new(w, h, gi.radiance_level_step)?.count();
+    let n0 = w.max(h) as f64;
+    let level = |tau: f64| radiance_level(n0 * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32;
+    Ok(ladder.iter().map(|&tau| level(tau)).collect())
+}
+
+/// The radiance stack's planes per channel: the levels the scan reads, 0 up to the coarsest in
+/// `levels` ([`radiance_levels`]; the near-field limit reads level 0).
+pub(crate) fn radiance_stack_levels(levels: &[u32]) -> usize {
+    levels.iter().max().map_or(1, |&l| l as usize + 1)
 }
 
 /// The pass's own buffers `(name, bytes)` in creation order (each at least 16 bytes), for a
@@ -116,7 +138,8 @@ fn scan_push(scene: &Scene, (ww, wh): (u32, u32), sample_count: u32, rad: &Radia
         specular: [k[0], k[1], k[2], 0.0],
         sample_offset: 0,
         probes: gi.radial_probes,
-        pad: [0; 2],
+        radiance_planes: rad.pyramid.stack_levels() as u32,
+        pad: 0,
     }
 }
 
@@ -139,7 +162,9 @@ impl IndirectPass {
         let (w, h) = (scene.field.width(), scene.field.height());
         let (ww, wh) = pyramid.work();
         let vector = vector_pyramid(scene);
-        let ScanData { samples, fold, ladder } = ScanData::new(scene, pyramid.layout().count());
+        let data = ScanData::new(scene, pyramid.layout().count());
+        let levels = data.radiance_levels(scene)?;
+        let ScanData { samples, fold, ladder } = data;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -159,6 +184,7 @@ impl IndirectPass {
                 gi.pyramid,
                 scene.wrap,
                 vector.then_some((n * n) as u32),
+                radiance_stack_levels(&levels),
                 RadianceInputs {
                     shade: shade.output(),
                     bounce: &bufs[BOUNCE],
@@ -167,16 +193,7 @@ impl IndirectPass {
                 },
             )?);
             let push = scan_push(scene, (ww, wh), samples.len() as u32, rad);
-            // Radiance level of every scan sample (docs/indirect.md §2), computed in f64.
             let layout = pyramid.layout();
-            let n_u = rad.pyramid.layout().count();
-            let levels: Vec<u32> = ladder
-                .iter()
-                .map(|&tau| {
-                    let t = w.max(h) as f64 * tau;
-                    radiance_level(t, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32
-                })
-                .collect();
             if uses_max_bound(scene) {
                 max = Some(MaxPyramid::new(ctx, pyramid)?);
             }

@@ -101,7 +101,9 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     let work = gi.working_size(w, h);
     let n2 = gi.sh_order * gi.sh_order;
     let mut e = MemoryEstimate::default();
-    let heights = PyramidBuffers::new(w, h, work, gi.level_step, gi.pyramid, PyramidKind::HEIGHTS, None)?;
+    let n_v = crate::rules::layout::PyramidLayout::new(w, h, gi.level_step)?.count();
+    let stack = Some(super::pyramid::height_stack_levels(gi, n_v));
+    let heights = PyramidBuffers::new(w, h, work, gi.level_step, gi.pyramid, PyramidKind::HEIGHTS, stack, None)?;
     e.buffers(heights.named(PyramidKind::HEIGHTS));
     let vis = VisibilityData::new(scene);
     e.buffers(visibility::buffer_sizes(vis.samples.len(), vis.fold.len(), vis.sets.len(), work, n2));
@@ -131,7 +133,8 @@ fn indirect_pass(scene: &Scene, work: (usize, usize), n_v: usize) -> Result<Memo
     let n2 = (gi.sh_order * gi.sh_order) as u32;
     let (channels, mode) = radiance::shape(gi.pyramid, vector_pyramid(scene).then_some(n2));
     let kind = radiance_kind(channels);
-    e.buffers(PyramidBuffers::new(w, h, work, gi.radiance_level_step, mode, kind, None)?.named(kind));
+    let planes = Some(indirect::radiance_stack_levels(&scan.radiance_levels(scene)?));
+    e.buffers(PyramidBuffers::new(w, h, work, gi.radiance_level_step, mode, kind, planes, None)?.named(kind));
     if uses_max_bound(scene) {
         e.buffer(pyramid_max::BUFFER_NAME, pyramid_max::buffer_bytes(&MaxLayout::new(w, h)));
     }

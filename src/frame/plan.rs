@@ -201,8 +201,11 @@ pub struct Planner {
     mode: PyramidMode,
     level_step: u32,
     levels: usize,
+    /// Stack planes the renderer keeps (the levels the scans read; docs/pyramid.md).
+    stack_levels: usize,
     radiance_level_step: u32,
     radiance_levels: usize,
+    radiance_stack_levels: usize,
     environment: bool,
     azimuths: u32,
     key_lights: usize,
@@ -241,14 +244,20 @@ impl Planner {
         };
         let n2 = (gi.sh_order * gi.sh_order) as u32;
         let vector = vector_pyramid(scene);
+        let levels = count(gi.level_step);
+        let ladder = crate::reference::direct::scan_steps(gi, levels);
+        let radiance_stack =
+            super::indirect::radiance_levels(scene, &ladder).map_or(0, |l| super::indirect::radiance_stack_levels(&l));
         Self {
             size,
             work: gi.working_size(size.0, size.1),
             mode: gi.pyramid,
             level_step: gi.level_step,
-            levels: count(gi.level_step),
+            levels,
+            stack_levels: super::pyramid::height_stack_levels(gi, levels.max(1)),
             radiance_level_step: gi.radiance_level_step,
             radiance_levels: count(gi.radiance_level_step),
+            radiance_stack_levels: radiance_stack,
             environment: has_environment(scene),
             azimuths: gi.azimuths,
             key_lights: scene.key_lights.len(),
@@ -334,8 +343,8 @@ impl Planner {
                     &mut stages,
                     Stage::PyramidSynthesize,
                     format!(
-                        "stack mode: {} levels resampled to the {}×{} working grid",
-                        self.levels, self.work.0, self.work.1
+                        "stack mode: the {} of {} levels the scans read resampled to the {}×{} working grid",
+                        self.stack_levels, self.levels, self.work.0, self.work.1
                     ),
                 ),
                 PyramidMode::Pyramid => add(
@@ -451,7 +460,10 @@ impl Planner {
                 add(&mut stages, Stage::RadianceGather(b), format!("{of}: gathers {src}{first}"));
                 add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {}", self.radiance_kind()));
                 if synthesize {
-                    let r = format!("{of}: stack mode, scalar radiance pyramid");
+                    let r = format!(
+                        "{of}: stack mode, scalar radiance pyramid: the {} of {} levels the scan reads",
+                        self.radiance_stack_levels, self.radiance_levels
+                    );
                     add(&mut stages, Stage::RadianceSynthesize(b), r);
                 } else if b == 1 {
                     let why = if self.vector {

@@ -6,12 +6,14 @@
 //!
 //! - [`PyramidMode::Stack`] (the paper's): every level is resampled back to the working
 //!   resolution with a cubic B-spline (Sigg & Hadwiger's bilinear-tap form) into a stack of
-//!   `n_v` full-resolution planes; later passes sample it bilinearly.
+//!   full-resolution planes; later passes sample it bilinearly. The stack holds the finest
+//!   `stack_levels ≤ n_v` levels of each channel: a renderer keeps only those its scans read
+//!   (with the level offset they never read the coarsest ones; [`scan_stack_levels`]).
 //! - [`PyramidMode::Pyramid`] (the paper's future work, §10): only the decimated levels are
 //!   kept, and later passes evaluate the cubic B-spline on the fly.
 //!
 //! Buffers, not images: levels are packed in one storage buffer (`f32`, row-major, offsets in
-//! [`PyramidLayout`]); the stack is a second buffer of `n_v` planes. After
+//! [`PyramidLayout`]); the stack is a second buffer of up to `n_v` planes per channel. After
 //! [`HeightPyramid::record`] a compute→compute barrier has been recorded, so later compute
 //! passes may read both; for transfer reads add [`crate::vk::barrier::compute_to_transfer`].
 //! Before it, the caller's writes to level 0 (by transfer or compute) are made visible by a
@@ -71,6 +73,21 @@ fn table_entries(layout: &PyramidLayout, kind: PyramidKind, origin: f32) -> Vec<
         .collect()
 }
 
+/// Stack planes per channel that a scan of `n_v` levels with level bias `bias = k·o` and
+/// `far` samples past the ladder reads: sample `i ∈ [−near, n_v + far)` reads level
+/// `clamp(i − bias, 0, n_v − 1)` (docs/direct.md §2), so the coarsest level read is
+/// `n_v + far − bias − 1`. The scanning shaders size their receiver-base loop by the same
+/// formula (`hfgi_scan_levels`, glsl/inc/hfgi_pyramid.glsl).
+pub(crate) fn scan_stack_levels(n_v: usize, bias: u32, far: u32) -> usize {
+    (n_v as i64 + i64::from(far) - i64::from(bias)).clamp(1, n_v.max(1) as i64) as usize
+}
+
+/// The height stack's planes for `scene`'s scans (visibility, key lights and the indirect scan
+/// share `k_v`, `o_v` and the far steps): [`scan_stack_levels`] of its `n_v` levels.
+pub(crate) fn height_stack_levels(gi: &crate::scene::model::GiSettings, n_v: usize) -> usize {
+    scan_stack_levels(n_v, gi.level_step * gi.level_offset, gi.far_steps())
+}
+
 /// The name of a pyramid buffer: `hfgi.{label}.{part}` (`part`: `levels`, `table`, `stack`).
 pub(crate) fn buffer_name(kind: PyramidKind, part: &str) -> String {
     format!("hfgi.{}.{part}", kind.label)
@@ -85,13 +102,17 @@ pub(crate) struct PyramidBuffers {
     pub levels: u64,
     /// `hfgi.{label}.table`: one [`GpuLevel`] per channel and level.
     pub table: u64,
-    /// `hfgi.{label}.stack`: stack mode only, `channels · n_v` planes of `work`, `f32`.
+    /// `hfgi.{label}.stack`: stack mode only, `channels · stack_levels` planes of `work`, `f32`.
     pub stack: Option<u64>,
+    /// Stack planes per channel: the finest levels kept (`1..=n_v`).
+    pub stack_levels: usize,
 }
 
 impl PyramidBuffers {
     /// The sizes for [`HeightPyramid::with_kind`]'s arguments, or its error. `max_dimension`:
     /// the device's `maxImageDimension2D` (`None`: not checked, as without a device).
+    /// `stack_levels`: the stack's planes per channel (`None`: every level; clamped to `1..=n_v`).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         width: usize,
         height: usize,
@@ -99,9 +120,11 @@ impl PyramidBuffers {
         k_v: u32,
         mode: PyramidMode,
         kind: PyramidKind,
+        stack_levels: Option<usize>,
         max_dimension: Option<usize>,
     ) -> Result<Self> {
         let layout = PyramidLayout::new(width, height, k_v)?;
+        let stack_levels = stack_levels.unwrap_or(layout.count()).clamp(1, layout.count());
         let channels = kind.channels.max(1) as u64;
         let table_len = table_entries(&layout, kind, 0.0).len();
         if channels * layout.total > u32::MAX as u64 {
@@ -122,7 +145,7 @@ impl PyramidBuffers {
             ));
         }
         let plane = (work.0 * work.1) as u64;
-        let stack_floats = plane * layout.count() as u64 * channels;
+        let stack_floats = plane * stack_levels as u64 * channels;
         if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
             return Err(Error::param(
                 "gi.pyramid",
@@ -134,6 +157,7 @@ impl PyramidBuffers {
             levels: layout.total * 4 * channels,
             table: (table_len * std::mem::size_of::<GpuLevel>()) as u64,
             stack: (mode == PyramidMode::Stack).then_some(stack_floats * 4),
+            stack_levels,
             layout,
         })
     }
@@ -148,9 +172,11 @@ impl PyramidBuffers {
 
 /// The height pyramid pass and its buffers. The same pass builds the RGB radiance pyramid
 /// ([`PyramidKind`] with 3 channels): channel `c` of level `i` is table entry `c·n_v + i`, at
-/// float offset `c·total + offset_i`, and stack plane `c·n_v + i`.
+/// float offset `c·total + offset_i`, and (for `i < stack_levels`) stack plane
+/// `c·stack_levels + i`.
 pub struct HeightPyramid {
     layout: PyramidLayout,
+    stack_levels: usize,
     kind: PyramidKind,
     origin: f32,
     mode: PyramidMode,
@@ -168,7 +194,7 @@ pub struct HeightPyramid {
 impl HeightPyramid {
     /// Allocates the buffers and pipelines for a `width × height` field whose stack (stack mode)
     /// is synthesized at the working resolution `work` (the visibility grid; `(width, height)`
-    /// without sub-sampling).
+    /// without sub-sampling), every level of it.
     pub fn new(
         ctx: &Context,
         width: usize,
@@ -178,10 +204,12 @@ impl HeightPyramid {
         mode: PyramidMode,
         wrap: bool,
     ) -> Result<Self> {
-        Self::with_kind(ctx, width, height, work, k_v, mode, wrap, PyramidKind::HEIGHTS)
+        Self::with_kind(ctx, width, height, work, k_v, mode, wrap, PyramidKind::HEIGHTS, None)
     }
 
-    /// [`HeightPyramid::new`] for any [`PyramidKind`].
+    /// [`HeightPyramid::new`] for any [`PyramidKind`], with a stack of the finest
+    /// `stack_levels` levels per channel (`None`: all; only levels below it may be read from
+    /// the stack).
     #[allow(clippy::too_many_arguments)]
     pub fn with_kind(
         ctx: &Context,
@@ -192,9 +220,10 @@ impl HeightPyramid {
         mode: PyramidMode,
         wrap: bool,
         kind: PyramidKind,
+        stack_levels: Option<usize>,
     ) -> Result<Self> {
         let max = ctx.info().max_image_dimension_2d as usize;
-        let sizes = PyramidBuffers::new(width, height, work, k_v, mode, kind, Some(max))?;
+        let sizes = PyramidBuffers::new(width, height, work, k_v, mode, kind, stack_levels, Some(max))?;
         let layout = sizes.layout.clone();
         let table_entries = table_entries(&layout, kind, 0.0);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
@@ -251,6 +280,7 @@ impl HeightPyramid {
         match (made, levels, table, decimate) {
             (Ok(()), Some(levels), Some(table), Some(decimate)) => Ok(Self {
                 layout,
+                stack_levels: sizes.stack_levels,
                 kind,
                 origin: 0.0,
                 mode,
@@ -358,14 +388,17 @@ impl HeightPyramid {
     }
 
     /// Records the synthesis of the stack (stage `*.synthesize`); nothing in pyramid mode.
+    /// Dispatch z = stack plane `c·stack_levels + i`; `level` carries `stack_levels | n_v << 16`
+    /// (glsl/pyramid/synthesize.comp.glsl).
     pub fn record_synthesize(&self, rec: &mut Recorder) {
         let wrap = self.wrap as u32;
-        let n = self.layout.count() as u32;
+        let n = self.stack_levels as u32;
         let channels = self.kind.channels.max(1);
         if let Some(p) = &self.synthesize {
             rec.scope(self.kind.stage_synthesize, |ctx, cmd| {
                 let (ww, wh) = self.work;
-                let push = PyramidPush { level: 0, wrap, out_width: ww, out_height: wh };
+                let level = n | (self.layout.count() as u32) << 16;
+                let push = PyramidPush { level, wrap, out_width: ww, out_height: wh };
                 p.dispatch(
                     ctx,
                     cmd,
@@ -399,9 +432,15 @@ impl HeightPyramid {
     pub fn table_buffer(&self) -> &Buffer {
         &self.table
     }
-    /// The synthesized stack (`n_v` planes of `work()` size, row-major), in stack mode.
+    /// The synthesized stack (`channels · stack_levels()` planes of `work()` size, row-major),
+    /// in stack mode.
     pub fn stack_buffer(&self) -> Option<&Buffer> {
         self.stack.as_ref()
+    }
+    /// Stack planes per channel: the finest levels the stack holds (`n_v` unless created with
+    /// fewer; [`HeightPyramid::with_kind`]).
+    pub fn stack_levels(&self) -> usize {
+        self.stack_levels
     }
 
     /// Bytes of GPU memory held by this mode's buffers.
@@ -420,8 +459,12 @@ impl HeightPyramid {
     /// Reads stack plane `i` back (waits; relative to [`HeightPyramid::origin`]). Stack mode only.
     pub fn read_stack(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
         let s = self.stack.as_ref().ok_or_else(|| Error::param("read_stack", "pyramid mode", "stack mode"))?;
-        if i >= self.layout.count() {
-            return Err(Error::param("level", i, format!("< {}", self.layout.count())));
+        if i >= self.stack_levels {
+            return Err(Error::param(
+                "stack level",
+                i,
+                format!("< {} (the levels the stack holds)", self.stack_levels),
+            ));
         }
         let plane = (self.work.0 * self.work.1) as u64;
         memory::download_f32(ctx, s, i as u64 * plane, plane)
@@ -433,7 +476,7 @@ impl HeightPyramid {
         memory::download_f32(ctx, &self.levels, 0, self.levels.size / 4)
     }
 
-    /// Diagnostics: the whole stack buffer (`channels · n_v` planes of `work()` size), read back
+    /// Diagnostics: the whole stack buffer (`channels · stack_levels()` planes of `work()` size), read back
     /// (waits); `None` in pyramid mode. Call after a recorded frame completed.
     pub fn read_stack_all(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
         self.stack.as_ref().map(|s| memory::download_f32(ctx, s, 0, s.size / 4)).transpose()
@@ -442,7 +485,12 @@ impl HeightPyramid {
     /// Samples the pyramid at `(level, x, y)` queries (x, y in level-0 texel units) on the GPU
     /// exactly as the scanning passes do: bilinear on the stack, or B-spline on the fly. The
     /// values are relative to [`HeightPyramid::origin`] (absolute with the default origin 0).
+    /// In stack mode a query's level must be one the stack holds (`< stack_levels()`).
     pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
+        let top = if self.stack.is_some() { self.stack_levels } else { self.layout.count() };
+        if let Some(q) = queries.iter().find(|q| !(q[0] >= 0.0 && (q[0] as usize) < top)) {
+            return Err(Error::param("probe level", q[0], format!("0 ≤ level < {top}")));
+        }
         let q: Vec<[f32; 4]> = queries.iter().map(|q| [q[0], q[1], q[2], 0.0]).collect();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
@@ -515,6 +563,40 @@ impl HeightPyramid {
         self.table.destroy(ctx);
         if let Some(s) = self.stack {
             s.destroy(ctx);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::direct::scan_level;
+    use crate::scene::model::{GiSettings, ScanReach};
+
+    /// The stack a renderer keeps is exactly the set of levels the twin's scan reads: every
+    /// level below `height_stack_levels` is read by some sample, none above it is.
+    #[test]
+    fn the_height_stack_keeps_exactly_the_levels_the_scan_reads() {
+        for (size, k_v, o_v, near, reach) in [
+            (512, 4, 6, 4, ScanReach::Diagonal),
+            (128, 4, 6, 4, ScanReach::Diagonal),
+            (97, 3, 2, 0, ScanReach::Side),
+            (64, 1, 0, 0, ScanReach::Diagonal),
+            (33, 8, 8, 2, ScanReach::Diagonal),
+            (2, 4, 6, 4, ScanReach::Side),
+        ] {
+            let gi = GiSettings {
+                level_step: k_v,
+                level_offset: o_v,
+                near_steps: near,
+                scan_reach: reach,
+                ..Default::default()
+            };
+            let n_v = PyramidLayout::new(size, size, k_v).unwrap().count();
+            let (lo, hi) = (-(near as i64), n_v as i64 + gi.far_steps() as i64);
+            let read: std::collections::BTreeSet<usize> = (lo..hi).map(|i| scan_level(i, k_v, o_v, n_v)).collect();
+            let kept = height_stack_levels(&gi, n_v);
+            assert_eq!(read, (0..kept).collect(), "{size}², k_v {k_v}, o_v {o_v}, {reach:?}: n_v {n_v}");
         }
     }
 }

@@ -65,6 +65,7 @@ pub struct RadiancePyramid {
 impl RadiancePyramid {
     /// A pyramid for a `width × height` radiance image, stack at `work`. `vector_n2`:
     /// `Some(n²)` for the glossy vector pyramid (3 + 3n² channels, always a true pyramid).
+    /// `stack_levels`: the finest levels the stack keeps per channel (those the scan reads).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
@@ -74,10 +75,12 @@ impl RadiancePyramid {
         mode: PyramidMode,
         wrap: bool,
         vector_n2: Option<u32>,
+        stack_levels: usize,
         inputs: RadianceInputs,
     ) -> Result<Self> {
         let (channels, mode) = shape(mode, vector_n2);
-        let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, radiance_kind(channels))?;
+        let kind = radiance_kind(channels);
+        let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, kind, Some(stack_levels))?;
         let binds = [
             Bind::Buffer(inputs.shade),
             Bind::Buffer(inputs.bounce),

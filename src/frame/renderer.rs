@@ -11,7 +11,7 @@ use super::indirect::IndirectPass;
 use super::live::{self, Live, RendererOptions};
 use super::local::LocalLightPass;
 use super::plan::{FrameState, Plan, Planner, Stage};
-use super::pyramid::HeightPyramid;
+use super::pyramid::{HeightPyramid, PyramidKind, PyramidLayout};
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
 use crate::error::{Error, Result};
@@ -81,7 +81,12 @@ impl Renderer {
         scene.check_limits()?;
         let (w, h) = (scene.field.width(), scene.field.height());
         let work = scene.gi.working_size(w, h);
-        let mut pyramid = HeightPyramid::new(ctx, w, h, work, scene.gi.level_step, scene.gi.pyramid, scene.wrap)?;
+        let gi = &scene.gi;
+        let n_v = PyramidLayout::new(w, h, gi.level_step)?.count();
+        let stack = Some(super::pyramid::height_stack_levels(gi, n_v));
+        let kind = PyramidKind::HEIGHTS;
+        let mut pyramid =
+            HeightPyramid::with_kind(ctx, w, h, work, gi.level_step, gi.pyramid, scene.wrap, kind, stack)?;
         let r = pyramid
             .upload(ctx, &scene.field)
             .and_then(|_| pyramid.set_origin(ctx, height_origin(&scene.field)))
@@ -341,7 +346,7 @@ impl Renderer {
     /// pipeline order, each with a name:
     ///
     /// - `pyramid.level{i}` (level `i` of the height pyramid, `W_i × H_i`) and, in stack mode,
-    ///   `pyramid.stack{i}` (plane `i` at the working resolution);
+    ///   `pyramid.stack{i}` (plane `i` at the working resolution, for the levels the stack keeps);
     /// - `visibility.v.{set}` (`set` = `environment` or `key{k}`): receivers × `n²`;
     /// - `shade.{plane}` for the six planes of the shading buffer (`total`, `direct`,
     ///   `indirect`, `glossy`, `glossy_direct`, `glossy_indirect`), raw `vec4`s (w = 1), and
@@ -359,7 +364,7 @@ impl Renderer {
             out.push((format!("pyramid.level{i}"), self.pyramid.read_level(ctx, i)?));
         }
         if self.pyramid.stack_buffer().is_some() {
-            for i in 0..self.pyramid.layout().count() {
+            for i in 0..self.pyramid.stack_levels() {
                 out.push((format!("pyramid.stack{i}"), self.pyramid.read_stack(ctx, i)?));
             }
         }

@@ -10,6 +10,7 @@ pub use crate::rules::layout::GpuLevel;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct PyramidPush {
+    /// Decimate: the level written; synthesize: `stack_levels | n_v << 16`; probe: the mode.
     pub level: u32,
     pub wrap: u32,
     pub out_width: u32,
@@ -259,7 +260,10 @@ pub struct IndirectPush {
     pub sample_offset: u32,
     /// `gi.radial_probes`: level-0 probes between two ladder samples.
     pub probes: u32,
-    pub pad: [u32; 2],
+    /// Radiance stack planes per channel ([`crate::frame::pyramid::HeightPyramid::stack_levels`]):
+    /// channel `c` of radiance level `l` is stack plane `c·radiance_planes + l`.
+    pub radiance_planes: u32,
+    pub pad: u32,
 }
 
 /// `hfgi_GatherPush`: push constants of `radiance.gather`.
@@ -528,7 +532,8 @@ mod layout_against_glsl {
             scan_extent,
             specular,
             sample_offset,
-            probes
+            probes,
+            radiance_planes
         });
         layout!(GatherPush { width, height, from_bounce, channel_stride, vector, n2 });
         layout!(ViewPush { view_proj, width, height, texel_size, eye, eye_lo });

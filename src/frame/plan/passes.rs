@@ -26,7 +26,9 @@ impl Planner {
         let (w, h) = self.size;
         let (ww, wh) = self.work;
         let storage = match self.mode {
-            PyramidMode::Stack => format!("stack mode: {} planes of {ww}×{wh}", self.levels),
+            PyramidMode::Stack => {
+                format!("stack mode: {} planes of {ww}×{wh} (the levels the scans read)", self.stack_levels)
+            }
             PyramidMode::Pyramid => "pyramid mode: decimated levels only".into(),
         };
         let mut sets = Vec::new();
@@ -112,11 +114,16 @@ impl Planner {
                     name: "RadiancePyramid",
                     created: true,
                     reason: format!(
-                        "part of IndirectPass: {}{}, {} levels (k_u = {})",
+                        "part of IndirectPass: {}{}, {} levels (k_u = {}){}",
                         self.radiance_kind(),
                         if self.vector { ", always a true pyramid" } else { "" },
                         self.radiance_levels,
-                        self.radiance_level_step
+                        self.radiance_level_step,
+                        if !self.vector && self.mode == PyramidMode::Stack {
+                            format!(", a stack of the {} the scan reads", self.radiance_stack_levels)
+                        } else {
+                            String::new()
+                        }
                     ),
                 });
             }
