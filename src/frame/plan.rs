@@ -254,7 +254,7 @@ impl Planner {
             mode: gi.pyramid,
             level_step: gi.level_step,
             levels,
-            stack_levels: super::pyramid::height_stack_levels(gi, levels.max(1)),
+            stack_levels: super::pyramid::height_stack_levels(gi, levels),
             radiance_level_step: gi.radiance_level_step,
             radiance_levels: count(gi.radiance_level_step),
             radiance_stack_levels: radiance_stack,
