@@ -72,6 +72,13 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
             "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",
             with(&["gi.blocker_shading=\"primal\"", "gi.sh_order=6"]),
         ),
+        ("f16, subsample 4, 3 bounces", "", with(&["gi.storage=\"f16\"", "gi.subsample=4", "gi.bounces=3"])),
+        ("f16, sh order 3 (odd n²)", "", with(&["gi.storage=\"f16\"", "gi.sh_order=3", "gi.bounces=1"])),
+        (
+            "f16, spheres, log_field",
+            "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",
+            with(&["gi.storage=\"f16\"", "gi.bounces=1", "gi.blocker_shading=\"log_field\"", "environment.preset=\"sky\""]),
+        ),
         (
             "spheres, log_brdf, matched log-ZH",
             "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",
@@ -169,6 +176,40 @@ fn estimate_equals_what_the_passes_allocate() {
     }
     let messages = common::finish(g);
     assert!(messages.is_empty(), "validation messages: {messages:?}");
+}
+
+/// The bytes of `V` and `U` from first principles: receivers × n² values (× 3 for U's rgb) of 4
+/// bytes (f32) or 2 bytes with each receiver padded to an even count (f16); the radiance stack
+/// halves (rounded up to a whole word), and nothing else changes.
+#[test]
+fn f16_storage_halves_v_u_and_the_radiance_stack() {
+    let bytes = |storage: &str, n: usize| {
+        let e = memory::renderer(&scene_of(
+            "",
+            &[
+                "heightfield.size=[64,48]",
+                "gi.bounces=1",
+                &format!("gi.sh_order={n}"),
+                &format!("gi.storage=\"{storage}\""),
+            ],
+        ))
+        .unwrap();
+        let get = |name: &str| e.buffers.iter().find(|(b, _)| b == name).unwrap().1;
+        (get("hfgi.visibility.v"), get("hfgi.indirect.u"), get("hfgi.radiance.stack"), e.total())
+    };
+    let receivers = 64 * 48;
+    let sets = 2; // the default scene: environment and one key light
+    for n in [3u64, 4] {
+        let (v32, u32_, r32, t32) = bytes("f32", n as usize);
+        let (v16, u16_, r16, t16) = bytes("f16", n as usize);
+        let pad = |x: u64| x.div_ceil(2) * 2;
+        assert_eq!(v32, sets * receivers * n * n * 4, "n = {n}");
+        assert_eq!(u32_, receivers * 3 * n * n * 4, "n = {n}");
+        assert_eq!(v16, sets * receivers * pad(n * n) * 2, "n = {n}");
+        assert_eq!(u16_, receivers * pad(3 * n * n) * 2, "n = {n}");
+        assert_eq!(r16, (r32 / 4).div_ceil(2) * 4, "n = {n}: radiance stack");
+        assert_eq!(t32 - t16, (v32 - v16) + (u32_ - u16_) + (r32 - r16), "n = {n}: nothing else changes");
+    }
 }
 
 #[test]

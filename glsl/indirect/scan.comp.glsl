@@ -18,6 +18,7 @@ layout(constant_id = 4) const uint HFGI_STACK = 1u;
 layout(constant_id = 5) const uint HFGI_WRAP = 0u;
 layout(constant_id = 6) const uint HFGI_STATIC_FLAGS = 0u;
 layout(constant_id = 7) const uint HFGI_RSTACK = 1u;
+layout(constant_id = 8) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_store.glsl)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -25,11 +26,11 @@ layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
 layout(std430, binding = 3) readonly buffer RLevels { float hfgi_radiance_levels[]; };
 layout(std430, binding = 4) readonly buffer RTable { hfgi_Level hfgi_radiance_table[]; };
-layout(std430, binding = 5) readonly buffer RStack { float hfgi_radiance_stack[]; };
+layout(std430, binding = 5) readonly buffer RStack { uint hfgi_radiance_stack[]; }; // gi.storage (hfgi_store.glsl)
 layout(std430, binding = 6) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ
 layout(std430, binding = 7) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE
 layout(std430, binding = 8) readonly buffer RLevel { uint hfgi_radiance_level[]; }; // per scan sample, from `first`
-layout(std430, binding = 9) buffer U { vec4 hfgi_u[]; };                      // receivers × n², over azimuth chunks
+layout(std430, binding = 9) buffer U { uint hfgi_u[]; };                      // receivers × n² × rgb, over azimuth chunks (hfgi_store.glsl)
 layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
     float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER];
     float hfgi_zh_diffuse[HFGI_MAX_SH_ORDER];
@@ -39,7 +40,8 @@ layout(std430, binding = 10) readonly buffer Consts {                         //
 layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };           // pyramid.max (with the bound)
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
-#define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : hfgi_radiance_stack[i])
+#include "hfgi_store.glsl"
+#define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : HFGI_LOAD(hfgi_radiance_stack, i))
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
@@ -142,8 +144,8 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
                                  hfgi_radiance_levels[k.z] - b, hfgi_radiance_levels[k.w] - b, f);
         } else {
             uvec4 k = at + (c * pc.radiance_planes + lv) * work.x * work.y; // lv < radiance_planes
-            rad[c] = hfgi_bilerp(hfgi_radiance_stack[k.x], hfgi_radiance_stack[k.y], hfgi_radiance_stack[k.z],
-                                 hfgi_radiance_stack[k.w], f);
+            rad[c] = hfgi_bilerp(HFGI_LOAD(hfgi_radiance_stack, k.x), HFGI_LOAD(hfgi_radiance_stack, k.y),
+                                 HFGI_LOAD(hfgi_radiance_stack, k.z), HFGI_LOAD(hfgi_radiance_stack, k.w), f);
         }
     }
     return rad;
@@ -322,7 +324,23 @@ void main() {
             hfgi_U[k] += acc;
         }
     }
-    uint out_base = (r.y * pc.work_width + r.x) * uint(HFGI_N2);
+    // Value 3k + c of the receiver's vector is channel c of coefficient k; the receiver stride is
+    // 3n², rounded up to even with f16 (Storage::stride).
+    const int count = 3 * HFGI_N2;
+    uint out_base = (r.y * pc.work_width + r.x) * hfgi_stride(count);
     bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
-    for (int k = 0; k < HFGI_N2; ++k) hfgi_u[out_base + uint(k)] = vec4(hfgi_U[k], 0.0) + (acc ? hfgi_u[out_base + uint(k)] : vec4(0.0));
+    if (HFGI_HALF != 0u) {
+        for (int i = 0; i < count; i += 2) {
+            uint o = (out_base + uint(i)) >> 1u;
+            int j = min(i + 1, count - 1);
+            vec2 v = vec2(hfgi_U[i / 3][i % 3], i + 1 < count ? hfgi_U[j / 3][j % 3] : 0.0);
+            hfgi_u[o] = hfgi_pack_pair(v, hfgi_u[o], acc);
+        }
+    } else {
+        for (int k = 0; k < HFGI_N2; ++k)
+            for (int c = 0; c < 3; ++c) {
+                uint o = out_base + uint(3 * k + c);
+                hfgi_u[o] = hfgi_pack_float(hfgi_U[k][c], hfgi_u[o], acc);
+            }
+    }
 }

@@ -23,10 +23,11 @@ layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (
 // T_ρ = exp*(f_hf + Σ f_i + f_ρ(N)) (binding 9's third vector) instead of ⟨L_env ⊛ V', cc_N⟩,
 // and its glossy light ⟨L_env, T_φ⟩ with T_φ = exp*(f_hf + Σ f_i + f_φ(R)) (the fourth vector).
 layout(constant_id = 3) const uint HFGI_BLOCKERS = 0u;
+layout(constant_id = 4) const uint HFGI_HALF = 0u; // gi.storage of binding 1: 1 = f16 (hfgi_store.glsl)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
-layout(std430, binding = 1) readonly buffer Vis { float hfgi_vis[]; };           // sets × receivers × n²; U: receivers × n² × vec4
+layout(std430, binding = 1) readonly buffer Vis { uint hfgi_vis[]; };            // sets × receivers × n²; U: receivers × n² × rgb (hfgi_store.glsl)
 layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };        // sets × n² (rgb), then per set its cap (key light: dir, α)
 layout(std430, binding = 3) readonly buffer Triple { uvec2 hfgi_triple[]; };     // (i | j<<8 | k<<16, γ bits)
 layout(std430, binding = 4) readonly buffer Albedo { vec4 hfgi_albedo[]; };      // per texel (albedo_map)
@@ -44,6 +45,7 @@ layout(std430, binding = 10) readonly buffer BSpheres { vec4 hfgi_spheres[]; }; 
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
+#include "hfgi_store.glsl"
 
 float height(int x, int y) {
     return hfgi_levels[uint(y) * pc.width + uint(x)];
@@ -115,14 +117,12 @@ vec3 hfgi_T2[HFGI_N2]; // log mode: the environment's L ⊛ exp*(f_hf + Σ f_i)
 float hfgi_V[HFGI_N2];
 float hfgi_VS[HFGI_N2]; // the blockers' visibility at the texel
 
-// V = the receiver grid's vectors at float offset `base` (n² per receiver), bilinear.
-void hfgi_interp(uint base, uint r00, uint r10, uint r01, uint r11, vec4 w, bool from_blockers) {
+// V = the blockers' vectors at float offset `base` (n² per receiver), bilinear.
+void hfgi_interp(uint base, uint r00, uint r10, uint r01, uint r11, vec4 w) {
     uint n2 = uint(HFGI_N2);
     for (int k = 0; k < HFGI_N2; ++k) {
         uint o = base + uint(k);
-        hfgi_V[k] = from_blockers
-            ? w.x * hfgi_bv[o + r00 * n2] + w.y * hfgi_bv[o + r10 * n2] + w.z * hfgi_bv[o + r01 * n2] + w.w * hfgi_bv[o + r11 * n2]
-            : w.x * hfgi_vis[o + r00 * n2] + w.y * hfgi_vis[o + r10 * n2] + w.z * hfgi_vis[o + r01 * n2] + w.w * hfgi_vis[o + r11 * n2];
+        hfgi_V[k] = w.x * hfgi_bv[o + r00 * n2] + w.y * hfgi_bv[o + r10 * n2] + w.z * hfgi_bv[o + r01 * n2] + w.w * hfgi_bv[o + r11 * n2];
     }
 }
 
@@ -153,24 +153,25 @@ void main() {
     vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
     if (HFGI_INDIRECT != 0) {
         // Incident indirect radiance: U of eq. 21, bilinear from the receiver grid.
+        uint us = hfgi_stride(3 * HFGI_N2);
         for (int k = 0; k < HFGI_N2; ++k) {
-            uint o = uint(k) * 4u;
             for (int c = 0; c < 3; ++c) {
-                uint oc = o + uint(c);
-                hfgi_T[k][c] = w00 * hfgi_vis[r00 * uint(HFGI_N2) * 4u + oc] + w10 * hfgi_vis[r10 * uint(HFGI_N2) * 4u + oc]
-                             + w01 * hfgi_vis[r01 * uint(HFGI_N2) * 4u + oc] + w11 * hfgi_vis[r11 * uint(HFGI_N2) * 4u + oc];
+                uint oc = uint(3 * k + c);
+                hfgi_T[k][c] = w00 * HFGI_LOAD(hfgi_vis, r00 * us + oc) + w10 * HFGI_LOAD(hfgi_vis, r10 * us + oc)
+                             + w01 * HFGI_LOAD(hfgi_vis, r01 * us + oc) + w11 * HFGI_LOAD(hfgi_vis, r11 * us + oc);
             }
         }
     }
     for (uint s = 0u; s < (HFGI_INDIRECT != 0 ? 0u : pc.set_count); ++s) {
-        uint base = s * receivers * uint(HFGI_N2);
+        uint vs = hfgi_stride(HFGI_N2);
+        uint base = s * receivers * vs;
         for (int k = 0; k < HFGI_N2; ++k) {
-            hfgi_V[k] = w00 * hfgi_vis[base + r00 * uint(HFGI_N2) + uint(k)] + w10 * hfgi_vis[base + r10 * uint(HFGI_N2) + uint(k)]
-                      + w01 * hfgi_vis[base + r01 * uint(HFGI_N2) + uint(k)] + w11 * hfgi_vis[base + r11 * uint(HFGI_N2) + uint(k)];
+            hfgi_V[k] = w00 * HFGI_LOAD(hfgi_vis, base + r00 * vs + uint(k)) + w10 * HFGI_LOAD(hfgi_vis, base + r10 * vs + uint(k))
+                      + w01 * HFGI_LOAD(hfgi_vis, base + r01 * vs + uint(k)) + w11 * HFGI_LOAD(hfgi_vis, base + r11 * vs + uint(k));
         }
         uint lbase = s * uint(HFGI_N2);
         bool combined = HFGI_BLOCKERS >= 2u && s == 0u; // log modes: the environment's own vector
-        if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+        if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11));
         // A key light with gi.blocker_key_lights = "overlap": scaled by the fraction of its cap
         // the spheres leave open, and kept out of the product with V_s.
         vec4 cap = hfgi_light[pc.set_count * uint(HFGI_N2) + s];
@@ -186,7 +187,7 @@ void main() {
     }
     if (HFGI_BLOCKERS != 0u) {
         // T ← T ⊛ V_s (+ the log mode's environment term), truncated to order n.
-        hfgi_interp(0u, r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+        hfgi_interp(0u, r00, r10, r01, r11, vec4(w00, w10, w01, w11));
         for (int k = 0; k < HFGI_N2; ++k) hfgi_VS[k] = hfgi_V[k];
         vec3 W[HFGI_N2];
         for (int k = 0; k < HFGI_N2; ++k) W[k] = hfgi_T2[k];
@@ -209,7 +210,7 @@ void main() {
     }
     if (HFGI_BLOCKERS == 3u && HFGI_INDIRECT == 0 && pc.set_count > 0u) {
         // log_brdf: the environment's diffuse term from its transfer vector (seed 001 §5).
-        hfgi_interp(2u * receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+        hfgi_interp(2u * receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11));
         for (int l = 0; l < HFGI_N; ++l) {
             for (int m = -l; m <= l; ++m) {
                 int k = l * (l + 1) + m;
@@ -238,7 +239,7 @@ void main() {
         if (HFGI_BLOCKERS == 3u && HFGI_INDIRECT == 0 && pc.set_count > 0u) {
             // log_brdf: the environment's glossy term from its glossy transfer (seed 001
             // eq. 27), ⟨L_env, T_φ⟩, instead of ⟨L_env ⊛ V', phong_R⟩ (hfgi_y holds Y(R)).
-            hfgi_interp(3u * receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11), true);
+            hfgi_interp(3u * receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11));
             for (int l = 0; l < HFGI_N; ++l) {
                 for (int m = -l; m <= l; ++m) {
                     int k = l * (l + 1) + m;

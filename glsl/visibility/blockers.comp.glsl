@@ -20,6 +20,7 @@ layout(constant_id = 1) const uint HFGI_EXP = 0u; // 0: quadrature, 1: optimal l
 layout(constant_id = 2) const uint HFGI_LOG = 0u; // 1: also exp*(f_hf + Σ f_i) for the environment; 2: and exp*(f_hf + Σ f_i + f_ρ(N))
 layout(constant_id = 3) const uint HFGI_PRIMAL = 0u; // 1: V_s = ⊛_i (1 − cap_i), no log space
 layout(constant_id = 4) const uint HFGI_MATCHED = 0u; // 1: the moment-matched log-ZH (math::logcap), no ε
+layout(constant_id = 5) const uint HFGI_HALF = 0u; // gi.storage of binding 4: 1 = f16 (hfgi_store.glsl)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };   // level 0 = absolute heights
@@ -32,7 +33,7 @@ layout(std430, binding = 3) readonly buffer Consts {
     float hfgi_log_brdf[HFGI_MAX_SH_ORDER]; // √(4π/(2l+1)) · ZH of ln max(cos θ/π, ε_ρ)
     float hfgi_matched[]; // HFGI_MATCHED: (K + 1) × n values √(4π/(2l+1)) · z_l(u_i)/u_i, u_i = i/K
 };
-layout(std430, binding = 4) readonly buffer Vis { float hfgi_vis[]; };        // the visibility sets (HFGI_LOG)
+layout(std430, binding = 4) readonly buffer Vis { uint hfgi_vis[]; };         // the visibility sets (HFGI_LOG; hfgi_store.glsl)
 layout(std430, binding = 5) writeonly buffer Out { float hfgi_bv[]; };        // receivers × n² (× 2 with HFGI_LOG = 1, × 4 with 2)
 layout(std430, binding = 6) readonly buffer Triple { uvec2 hfgi_triple[]; };  // (i | j<<8 | k<<16, γ bits)
 layout(push_constant) uniform Push { hfgi_BlockerPush pc; };
@@ -42,6 +43,7 @@ layout(push_constant) uniform Push { hfgi_BlockerPush pc; };
 #define HFGI_FIELD_HGT pc.height
 #define HFGI_FIELD_S pc.texel_size
 #include "hfgi_field.glsl"
+#include "hfgi_store.glsl"
 
 const float HFGI_SQRT_4PI = 3.5449077018110318;
 const float HFGI_TWO_PI = 6.283185307179586;
@@ -218,8 +220,8 @@ void main() {
     for (int k = 0; k < HFGI_N2; ++k) hfgi_bv[idx * uint(HFGI_N2) + uint(k)] = hfgi_v[k];
     if (HFGI_LOG != 0u) {
         // f_hf = log ε·(√4π·e_0 − V_env): log ε where the height field blocks, 0 where open.
-        uint base = pc.env_offset + idx * uint(HFGI_N2);
-        for (int k = 0; k < HFGI_N2; ++k) hfgi_f[k] -= pc.log_eps * hfgi_vis[base + uint(k)];
+        uint base = pc.env_offset + idx * hfgi_stride(HFGI_N2);
+        for (int k = 0; k < HFGI_N2; ++k) hfgi_f[k] -= pc.log_eps * HFGI_LOAD(hfgi_vis, base + uint(k));
         hfgi_f[0] += pc.log_eps * HFGI_SQRT_4PI;
         exponentiate();
         uint o = (receivers + idx) * uint(HFGI_N2);

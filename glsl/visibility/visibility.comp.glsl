@@ -17,6 +17,7 @@ layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) o
 layout(constant_id = 3) const uint HFGI_STACK = 1u;
 layout(constant_id = 4) const uint HFGI_WRAP = 0u;
 layout(constant_id = 5) const uint HFGI_STATIC_FLAGS = 0u;
+layout(constant_id = 6) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_store.glsl)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -24,12 +25,13 @@ layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
 layout(std430, binding = 3) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ, lo, hi
 layout(std430, binding = 4) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE, row-major
-layout(std430, binding = 5) buffer Vis { float hfgi_vis[]; };                  // accumulated over azimuth chunks
+layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };                   // accumulated over azimuth chunks (hfgi_store.glsl)
 layout(std430, binding = 6) readonly buffer Horizons { float hfgi_horizons[]; }; // sweep: [sample][receiver][2]
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_near.glsl"
+#include "hfgi_store.glsl"
 
 float hfgi_omega[HFGI_NV];
 float hfgi_base[HFGI_NV];
@@ -150,7 +152,16 @@ void main() {
             V[k] += acc;
         }
     }
-    uint out_base = pc.out_offset + (r.y * pc.work_width + r.x) * uint(HFGI_N2);
+    // Receiver stride n², rounded up to even with f16 (Storage::stride); out_offset likewise.
+    uint stride = hfgi_stride(HFGI_N2);
+    uint out_base = pc.out_offset + (r.y * pc.work_width + r.x) * stride;
     bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
-    for (int k = 0; k < HFGI_N2; ++k) hfgi_vis[out_base + uint(k)] = V[k] + (acc ? hfgi_vis[out_base + uint(k)] : 0.0);
+    if (HFGI_HALF != 0u) {
+        for (int k = 0; k < HFGI_N2; k += 2) {
+            uint o = (out_base + uint(k)) >> 1u;
+            hfgi_vis[o] = hfgi_pack_pair(vec2(V[k], k + 1 < HFGI_N2 ? V[min(k + 1, HFGI_N2 - 1)] : 0.0), hfgi_vis[o], acc);
+        }
+    } else {
+        for (int k = 0; k < HFGI_N2; ++k) hfgi_vis[out_base + uint(k)] = hfgi_pack_float(V[k], hfgi_vis[out_base + uint(k)], acc);
+    }
 }

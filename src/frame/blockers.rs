@@ -217,7 +217,14 @@ impl BlockerPass {
                 &shaders::VISIBILITY_BLOCKERS_COMP,
                 &[DescriptorKind::StorageBuffer; 7],
                 std::mem::size_of::<BlockerPush>() as u32,
-                &[(0, n as u32), (1, exp), (2, log_mode(scene)), (3, primal as u32), (4, matched(scene) as u32)],
+                &[
+                    (0, n as u32),
+                    (1, exp),
+                    (2, log_mode(scene)),
+                    (3, primal as u32),
+                    (4, matched(scene) as u32),
+                    (5, scene.gi.storage.spec()),
+                ],
                 1,
             )?);
             p.allocate_set(

@@ -26,7 +26,7 @@ use crate::error::Result;
 use crate::math::{azimuth, elevation};
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
-use crate::scene::model::{PyramidMode, Scene};
+use crate::scene::model::{PyramidMode, Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
@@ -50,6 +50,9 @@ pub struct IndirectPass {
     /// the later ones' (their probes differ, and a probe is a loop iteration like a sample).
     chunks: [Vec<(u32, u32)>; 2],
     shade_push: ShadePush,
+    /// SH order and `gi.storage` of `U` (for [`IndirectPass::read_u`]).
+    n: usize,
+    storage: Storage,
 }
 
 /// What the scan uploads, from the scene: the environment set's azimuth samples
@@ -105,7 +108,8 @@ pub(crate) fn buffer_sizes(
 ) -> [(&'static str, u64); 6] {
     let n = scene.gi.sh_order;
     let (w, h) = (scene.field.width(), scene.field.height());
-    let u_bytes = (work.0 as u64 * work.1 as u64) * (n * n) as u64 * 16;
+    // U: receivers × n² × rgb in gi.storage (glsl/inc/hfgi_store.glsl).
+    let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(3 * n * n) as u64);
     [
         ("hfgi.indirect.samples", samples as u64 * 16),
         ("hfgi.indirect.fold", fold as u64 * 4),
@@ -184,7 +188,7 @@ impl IndirectPass {
                 gi.pyramid,
                 scene.wrap,
                 vector.then_some((n * n) as u32),
-                radiance_stack_levels(&levels),
+                (radiance_stack_levels(&levels), gi.storage),
                 RadianceInputs {
                     shade: shade.output(),
                     bounce: &bufs[BOUNCE],
@@ -212,6 +216,7 @@ impl IndirectPass {
                         (2, vector as u32),
                         (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
                         (7, push.radiance_stack),
+                        (8, gi.storage.spec()),
                     ][..],
                     &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags),
                 ]
@@ -245,7 +250,13 @@ impl IndirectPass {
                 &shaders::SHADE_DIRECT_COMP,
                 &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32), (1, 1), (2, vector as u32), (3, super::blockers::shading_mode(scene))],
+                &[
+                    (0, n as u32),
+                    (1, 1),
+                    (2, vector as u32),
+                    (3, super::blockers::shading_mode(scene)),
+                    (4, gi.storage.spec()),
+                ],
                 1,
             )?;
             let sh = pipes.push_get(sh);
@@ -300,6 +311,8 @@ impl IndirectPass {
             push,
             probes_later: gi.radial_probes_later,
             shade_push: shade.push(),
+            n,
+            storage: gi.storage,
         })
     }
 
@@ -365,16 +378,18 @@ impl IndirectPass {
         });
     }
 
-    /// The IR vectors of the last bounce: receivers × `n²` × `vec4` (rgb, 0).
+    /// The IR vectors of the last bounce: receivers × `n²` × rgb in `gi.storage`
+    /// (glsl/inc/hfgi_store.glsl).
     pub fn u_buffer(&self) -> &Buffer {
         &self.buffers[U]
     }
 
-    /// Diagnostics: the IR vectors of the last bounce (receivers × `n²` × `vec4`), read back
-    /// (waits). Call after a recorded frame completed.
+    /// Diagnostics: the IR vectors of the last bounce (receivers × `n²` × rgb, as f32 whatever
+    /// `gi.storage`), read back (waits). Call after a recorded frame completed.
     pub fn read_u(&self, ctx: &Context) -> Result<Vec<f32>> {
-        let b = &self.buffers[U];
-        memory::download_f32(ctx, b, 0, b.size / 4)
+        let values = 3 * self.n * self.n;
+        let receivers = (self.push.work_width * self.push.work_height) as usize;
+        super::storage::download_vectors(ctx, &self.buffers[U], self.storage, 0, receivers, values)
     }
 
     /// Diagnostics: the bounce buffer, the last bounce's diffuse and glossy exit radiance (two

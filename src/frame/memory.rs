@@ -106,7 +106,7 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     let heights = PyramidBuffers::new(w, h, work, gi.level_step, gi.pyramid, PyramidKind::HEIGHTS, stack, None)?;
     e.buffers(heights.named(PyramidKind::HEIGHTS));
     let vis = VisibilityData::new(scene);
-    e.buffers(visibility::buffer_sizes(vis.samples.len(), vis.fold.len(), vis.sets.len(), work, n2));
+    e.buffers(visibility::buffer_sizes(vis.samples.len(), vis.fold.len(), vis.sets.len(), work, n2, gi.storage));
     if let Some(plan) = visibility::sweep_plan(scene) {
         e.buffers(plan.buffer_sizes());
     }
@@ -132,7 +132,7 @@ fn indirect_pass(scene: &Scene, work: (usize, usize), n_v: usize) -> Result<Memo
     e.buffers(indirect::buffer_sizes(scene, work32, scan.samples.len(), scan.fold.len(), scan.ladder.len()));
     let n2 = (gi.sh_order * gi.sh_order) as u32;
     let (channels, mode) = radiance::shape(gi.pyramid, vector_pyramid(scene).then_some(n2));
-    let kind = radiance_kind(channels);
+    let kind = radiance_kind(channels, gi.storage);
     let planes = Some(indirect::radiance_stack_levels(&scan.radiance_levels(scene)?));
     e.buffers(PyramidBuffers::new(w, h, work, gi.radiance_level_step, mode, kind, planes, None)?.named(kind));
     if uses_max_bound(scene) {

@@ -15,6 +15,7 @@ pub mod renderer;
 pub mod shade;
 pub mod shared;
 pub mod stages;
+pub mod storage;
 pub mod sweep;
 pub mod transfer;
 pub mod truth;

@@ -25,6 +25,7 @@ use gpu_allocator::MemoryLocation;
 use super::shared::{GpuLevel, PyramidPush};
 use crate::error::{Error, Result};
 pub use crate::rules::layout::PyramidLayout;
+use crate::scene::model::Storage;
 use crate::scene::HeightField;
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -45,6 +46,9 @@ pub struct PyramidKind {
     pub stage_decimate: &'static str,
     pub stage_synthesize: &'static str,
     pub label: &'static str,
+    /// How the stack stores its values (the radiance stack follows `gi.storage`; the height
+    /// stack is always f32: heights need more than a half's 11 bits).
+    pub stack_storage: Storage,
 }
 
 impl PyramidKind {
@@ -55,6 +59,7 @@ impl PyramidKind {
         stage_decimate: STAGE_DECIMATE,
         stage_synthesize: STAGE_SYNTHESIZE,
         label: "pyramid",
+        stack_storage: Storage::F32,
     };
 }
 
@@ -156,7 +161,7 @@ impl PyramidBuffers {
         Ok(Self {
             levels: layout.total * 4 * channels,
             table: (table_len * std::mem::size_of::<GpuLevel>()) as u64,
-            stack: (mode == PyramidMode::Stack).then_some(stack_floats * 4),
+            stack: (mode == PyramidMode::Stack).then_some(kind.stack_storage.bytes(stack_floats)),
             stack_levels,
             layout,
         })
@@ -270,7 +275,7 @@ impl HeightPyramid {
                     &shaders::PYRAMID_SYNTHESIZE_COMP,
                     &[DescriptorKind::StorageBuffer; 3],
                     16,
-                    &[],
+                    &[(0, kind.stack_storage.spec())],
                     1,
                 )?);
                 sets.1 = p.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb), Bind::Buffer(st)])?;
@@ -459,6 +464,9 @@ impl HeightPyramid {
     /// Reads stack plane `i` back (waits; relative to [`HeightPyramid::origin`]). Stack mode only.
     pub fn read_stack(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
         let s = self.stack.as_ref().ok_or_else(|| Error::param("read_stack", "pyramid mode", "stack mode"))?;
+        if self.kind.stack_storage != Storage::F32 {
+            return Err(Error::param("read_stack", "an f16 stack", "an f32 stack (read_stack_all reads any)"));
+        }
         if i >= self.stack_levels {
             return Err(Error::param(
                 "stack level",
@@ -479,7 +487,9 @@ impl HeightPyramid {
     /// Diagnostics: the whole stack buffer (`channels · stack_levels()` planes of `work()` size), read back
     /// (waits); `None` in pyramid mode. Call after a recorded frame completed.
     pub fn read_stack_all(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
-        self.stack.as_ref().map(|s| memory::download_f32(ctx, s, 0, s.size / 4)).transpose()
+        let values = self.kind.channels.max(1) as usize * self.stack_levels * (self.work.0 * self.work.1) as usize;
+        let storage = self.kind.stack_storage;
+        self.stack.as_ref().map(|s| super::storage::download_vectors(ctx, s, storage, 0, 1, values)).transpose()
     }
 
     /// Samples the pyramid at `(level, x, y)` queries (x, y in level-0 texel units) on the GPU

@@ -14,7 +14,7 @@ use ash::vk;
 use super::pyramid::{HeightPyramid, PyramidKind};
 use super::shared::GatherPush;
 use crate::error::Result;
-use crate::scene::model::PyramidMode;
+use crate::scene::model::{PyramidMode, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, Buffer, ComputePipeline, Context, Recorder};
@@ -23,9 +23,10 @@ pub const STAGE_GATHER: &str = super::stages::stage_name("radiance.gather");
 pub const STAGE_DECIMATE: &str = super::stages::stage_name("radiance.decimate");
 pub const STAGE_SYNTHESIZE: &str = super::stages::stage_name("radiance.synthesize");
 
-/// The radiance pyramid kind: `channels` channels, `source = 1`.
-pub fn radiance_kind(channels: u32) -> PyramidKind {
+/// The radiance pyramid kind: `channels` channels, `source = 1`, its stack in `storage`.
+pub fn radiance_kind(channels: u32, storage: Storage) -> PyramidKind {
     PyramidKind {
+        stack_storage: storage,
         channels,
         source: 1,
         stage_decimate: STAGE_DECIMATE,
@@ -65,7 +66,8 @@ pub struct RadiancePyramid {
 impl RadiancePyramid {
     /// A pyramid for a `width × height` radiance image, stack at `work`. `vector_n2`:
     /// `Some(n²)` for the glossy vector pyramid (3 + 3n² channels, always a true pyramid).
-    /// `stack_levels`: the finest levels the stack keeps per channel (those the scan reads).
+    /// `stack`: the finest levels the stack keeps per channel (those the scan reads) and how it
+    /// stores them (`gi.storage`).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
@@ -75,11 +77,12 @@ impl RadiancePyramid {
         mode: PyramidMode,
         wrap: bool,
         vector_n2: Option<u32>,
-        stack_levels: usize,
+        stack: (usize, Storage),
         inputs: RadianceInputs,
     ) -> Result<Self> {
         let (channels, mode) = shape(mode, vector_n2);
-        let kind = radiance_kind(channels);
+        let (stack_levels, storage) = stack;
+        let kind = radiance_kind(channels, storage);
         let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, kind, Some(stack_levels))?;
         let binds = [
             Bind::Buffer(inputs.shade),

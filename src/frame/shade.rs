@@ -256,7 +256,13 @@ impl ShadePass {
                 &shaders::SHADE_DIRECT_COMP,
                 &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[(0, n as u32), (1, 0), (2, store_t as u32), (3, super::blockers::shading_mode(scene))],
+                &[
+                    (0, n as u32),
+                    (1, 0),
+                    (2, store_t as u32),
+                    (3, super::blockers::shading_mode(scene)),
+                    (4, scene.gi.storage.spec()),
+                ],
                 1,
             )?);
             p.allocate_set(

@@ -16,7 +16,7 @@ use crate::error::Result;
 use crate::math::azimuth::AzimuthSet;
 use crate::math::elevation;
 pub use crate::rules::lighting::{has_environment, light_sets, SetKind};
-use crate::scene::model::{PyramidMode, Scene, VisibilityMethod};
+use crate::scene::model::{PyramidMode, Scene, Storage, VisibilityMethod};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
@@ -79,12 +79,13 @@ pub(crate) fn buffer_sizes(
     sets: usize,
     work: (usize, usize),
     n2: usize,
+    storage: Storage,
 ) -> [(&'static str, u64); 3] {
-    let vis_floats = (sets.max(1) * work.0 * work.1 * n2) as u64;
+    let vis_values = (sets.max(1) * work.0 * work.1 * storage.stride(n2)) as u64;
     [
         ("hfgi.visibility.samples", (samples.max(1) * 16) as u64),
         ("hfgi.visibility.fold", (fold.max(1) * 4) as u64),
-        ("hfgi.visibility.v", vis_floats * 4),
+        ("hfgi.visibility.v", storage.bytes(vis_values)),
     ]
 }
 
@@ -97,6 +98,8 @@ pub struct VisibilityPass {
     vis: Buffer,
     sets: Vec<SetRange>,
     n: usize,
+    /// `gi.storage` of `V`.
+    storage: Storage,
     push: VisibilityPush,
     /// Loop iterations per azimuth (ladder + n²·e; n²·e with the sweep), for the azimuth chunks.
     loop_cost: u32,
@@ -119,7 +122,8 @@ impl VisibilityPass {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
-        let sizes = buffer_sizes(samples.len(), fold.len(), sets.len(), (ww as usize, wh as usize), n2);
+        let storage = scene.gi.storage;
+        let sizes = buffer_sizes(samples.len(), fold.len(), sets.len(), (ww as usize, wh as usize), n2, storage);
         let mut parts: Vec<Buffer> = Vec::new();
         let mut pipeline = None;
         let mut sweep = None;
@@ -161,6 +165,7 @@ impl VisibilityPass {
                         (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
                     ][..],
                     &super::shared::static_modes(3, push.stack_mode, push.wrap, push.flags),
+                    &[(6, storage.spec())],
                 ]
                 .concat(),
                 1,
@@ -203,6 +208,7 @@ impl VisibilityPass {
             vis,
             sets,
             n,
+            storage,
             push,
             loop_cost: (if sweep.is_some() {
                 4 * scene.gi.sweep_near as usize + 8 // the near field's pieces (hfgi_near_slope's guard)
@@ -236,7 +242,7 @@ impl VisibilityPass {
     /// (stage `visibility.key_lights`); nothing when there are no such sets.
     pub fn record_sets(&self, rec: &mut Recorder, environment: bool) {
         let receivers = self.push.work_width * self.push.work_height;
-        let n2 = (self.n * self.n) as u32;
+        let stride = self.storage.stride(self.n * self.n) as u32;
         let groups = [
             groups(self.push.work_width, crate::constants::WORKGROUP),
             groups(self.push.work_height, crate::constants::WORKGROUP),
@@ -274,7 +280,7 @@ impl VisibilityPass {
                         let push = VisibilityPush {
                             sample_offset: s.first + hfirst + first,
                             sample_count: *count,
-                            out_offset: *i as u32 * receivers * n2,
+                            out_offset: *i as u32 * receivers * stride,
                             flags: self.push.flags | if later { FLAG_ACCUMULATE } else { 0 },
                             horizon_first: s.first + hfirst,
                             ..self.push
@@ -299,10 +305,10 @@ impl VisibilityPass {
     pub fn buffer(&self) -> &Buffer {
         &self.vis
     }
-    /// Reads the V vectors of set `i` back (`receivers × n²` floats; waits).
+    /// Reads the V vectors of set `i` back (`receivers × n²` floats whatever `gi.storage`; waits).
     pub fn read(&self, ctx: &Context, i: usize) -> Result<Vec<f32>> {
-        let per = (self.push.work_width * self.push.work_height) as u64 * (self.n * self.n) as u64;
-        memory::download_f32(ctx, &self.vis, i as u64 * per, per)
+        let receivers = (self.push.work_width * self.push.work_height) as usize;
+        super::storage::download_vectors(ctx, &self.vis, self.storage, i * receivers, receivers, self.n * self.n)
     }
     /// Bytes of GPU memory held.
     pub fn memory_bytes(&self) -> u64 {

@@ -207,6 +207,41 @@ settings_enum!(
 );
 
 settings_enum!(
+    /// Storage of the visibility vectors `V`, the IR vectors `U` and the radiance stack
+    /// (`gi.storage`, docs/performance.md §9): what the scans and the synthesis write and the
+    /// scan and the shading read. The height pyramid is always f32.
+    Storage, "gi.storage", "`f32` or `f16`", {
+        /// 32-bit floats.
+        F32 = "f32",
+        /// IEEE half floats, two to a 32-bit word (`packHalf2x16`): half the memory, about
+        /// 2⁻¹¹ relative rounding per stored value; the scans and the shading compute in f32.
+        F16 = "f16",
+    }
+);
+
+impl Storage {
+    /// Values one receiver's vector of `values` numbers occupies: rounded up to even with f16,
+    /// so that a packed pair never straddles two receivers.
+    pub fn stride(self, values: usize) -> usize {
+        match self {
+            Storage::F32 => values,
+            Storage::F16 => values.div_ceil(2) * 2,
+        }
+    }
+    /// Bytes of `values` stored values (whole 32-bit words).
+    pub fn bytes(self, values: u64) -> u64 {
+        match self {
+            Storage::F32 => values * 4,
+            Storage::F16 => values.div_ceil(2) * 4,
+        }
+    }
+    /// The shaders' `HFGI_HALF` specialization constant.
+    pub fn spec(self) -> u32 {
+        u32::from(self == Storage::F16)
+    }
+}
+
+settings_enum!(
     /// How a sphere blocker's log-SH visibility is exponentiated (`gi.blocker_exp`,
     /// docs/blockers.md §3; Ren et al. 2006).
     BlockerExp, "gi.blocker_exp", "`quadrature` or `linear`", {
@@ -347,6 +382,9 @@ pub struct GiSettings {
     pub elevation_basis: ElevationBasis,
     /// Horizons of the environment and key-light visibility: the ladder scan or line sweeps.
     pub visibility: VisibilityMethod,
+    /// Storage of the visibility and IR vectors and the radiance stack (f32, or f16 at half
+    /// their memory).
+    pub storage: Storage,
     /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
     /// docs/direct.md §7), 0..=64; the sweep lines give the horizon beyond.
     pub sweep_near: u32,
@@ -420,6 +458,7 @@ impl GiSettings {
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
             visibility: VisibilityMethod::Ladder,
+            storage: Storage::F32,
             sweep_near: 16,
             blocker_epsilon: 0.2,
             blocker_ratio: true,
@@ -446,6 +485,7 @@ impl GiSettings {
             glossy_pyramid: self.glossy_pyramid,
             amortize: self.amortize,
             visibility: self.visibility,
+            storage: self.storage,
             sweep_near: self.sweep_near,
             ..GiSettings::preset(q)
         }
@@ -457,7 +497,7 @@ impl GiSettings {
         format!(
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
-             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} sweep_near={} key_light_azimuths={} bounces={} \
+             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
              local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={}",
             self.quality,
             self.sh_order,
@@ -478,6 +518,7 @@ impl GiSettings {
             self.omega_min,
             self.elevation_basis,
             self.visibility,
+            self.storage,
             self.sweep_near,
             self.key_light_azimuths,
             self.bounces,
