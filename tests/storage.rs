@@ -1,13 +1,15 @@
-//! `gi.storage = "f16"` (docs/performance.md §9): the visibility vectors `V` and the IR vectors
-//! `U` stored as IEEE halves.
+//! `gi.storage = "f16"` (docs/performance.md §9): the visibility vectors `V`, the IR vectors `U`
+//! and the radiance stack stored as IEEE halves.
 //!
 //! - The packing: every stored `V` value is the f32 pipeline's value rounded to a half (within
 //!   half an ulp, 2⁻¹¹ relative), for even and odd `n²` (the odd one pads each receiver to an
-//!   even count), two light sets (the second set's offset) and a sub-sampled receiver grid;
-//!   `U` follows the f32 `U` within the rounding of `V` it inherits.
+//!   even count), two light sets (the second set's offset) and a sub-sampled receiver grid; the
+//!   radiance stack (planes of odd size) and `U` follow the f32 pipeline's within the rounding
+//!   of `V` they inherit.
 //! - The error it adds, against the exact reference (`render_truth_gpu`), on the hard fields of
 //!   `scenes/hard/` at a reduced size (as tests/accuracy.rs): at most 0.05 percentage points in
 //!   every layer, and the f16 shading within 1e-3 (relative L2) of the f32 shading.
+//! - The range: values beyond ±65504 are clamped, never infinite.
 
 mod common;
 
@@ -71,6 +73,45 @@ fn f16_vectors_are_the_f32_vectors_rounded() {
     }
 }
 
+/// Every mode that reads or writes the f16 buffers renders with f16 within 1e-3 (relative L2,
+/// every layer) of the same scene with f32: the true pyramid with the glossy vector pyramid
+/// (no radiance stack; U from the vector pyramid), swept horizons, sphere blockers in log
+/// space (which read `V`), a periodic field, three bounces with sub-sampling 4.
+#[test]
+fn f16_renders_every_mode_like_f32() {
+    let ctx = gpu();
+    let sphere = "[[sphere]]\ncenter = [12.0, 10.0, 6.0]\nradius = 3.0\n";
+    let cases: [(&str, &str, &[&str]); 5] = [
+        (
+            "pyramid, glossy vector",
+            "",
+            &["gi.pyramid=\"pyramid\"", "gi.glossy_pyramid=\"vector\"", "material.specular=[0.2,0.2,0.2]"],
+        ),
+        ("sweep", "", &["gi.visibility=\"sweep\""]),
+        ("spheres, log_field", sphere, &["gi.blocker_shading=\"log_field\"", "environment.preset=\"sky\""]),
+        ("wrap", "", &["heightfield.wrap=true"]),
+        ("subsample 4, 3 bounces", "", &["gi.subsample=4", "gi.bounces=3", "heightfield.size=[64,41]"]),
+    ];
+    for (label, text, extra) in cases {
+        let mut o: Vec<String> =
+            ["heightfield.size=[37,29]", "gi.azimuths=8", "gi.bounces=1"].map(String::from).to_vec();
+        o.extend(extra.iter().map(|s| s.to_string()));
+        let s =
+            hfgi::scene::file::parse_scene(text, Path::new("."), "test", &o).unwrap_or_else(|e| panic!("{label}: {e}"));
+        let a = render_layers(&ctx, &with_storage(&s, Storage::F32));
+        let b = render_layers(&ctx, &with_storage(&s, Storage::F16));
+        for (layer, x, y) in
+            [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
+        {
+            let x64: Vec<[f64; 3]> = x.iter().map(|p| p.map(f64::from)).collect();
+            let d = rel_l2(y, &x64);
+            assert!(y.iter().flatten().all(|v| v.is_finite()), "{label}: f16 {layer} not finite");
+            assert!(d <= 1e-3, "{label}: {layer} f16 vs f32 {d:e}");
+            eprintln!("{label}: {layer} f16 vs f32 {d:.2e}");
+        }
+    }
+}
+
 fn load(file: &str, size: &str, extra: &[&str]) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hard").join(file);
     let mut o = vec![format!("heightfield.size={size}")];
@@ -117,4 +158,29 @@ fn f16_adds_no_error_on_spikes_sub_sampled() {
 #[test]
 fn f16_adds_no_error_on_a_steep_non_square_field_below_zero() {
     against_the_reference("steep.toml", "[48, 34]", &[]);
+}
+
+/// Values beyond the half's range are clamped to ±65504, never infinite: a key light of
+/// radiance 10¹¹ (within `limits::MAX_RADIANCE`) with f16 gives finite layers; its direct light
+/// (from `V`, bounded by √4π) is the f32 pipeline's within 1e-3, and its indirect light is below
+/// the f32 pipeline's (the clamp is reached: `U` and the radiance stack exceed the range).
+#[test]
+fn f16_clamps_values_beyond_the_half_range() {
+    let ctx = gpu();
+    let mut s = scene(rough_field(32, 24, 9));
+    s.gi.azimuths = 8;
+    s.gi.bounces = 1;
+    s.key_lights = vec![key_light(40.0, 30.0, 0.27, 1e11)];
+    let a = render_layers(&ctx, &with_storage(&s, Storage::F32));
+    let b = render_layers(&ctx, &with_storage(&s, Storage::F16));
+    for (layer, v) in [("direct", &b.direct), ("indirect", &b.indirect), ("total", &b.total)] {
+        assert!(v.iter().flatten().all(|x| x.is_finite()), "f16 {layer} is not finite");
+    }
+    let to64 = |v: &[[f32; 3]]| v.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>();
+    let d = rel_l2(&b.direct, &to64(&a.direct));
+    assert!(d <= 1e-3, "direct f16 vs f32 {d:e}");
+    let sum = |v: &[[f32; 3]]| v.iter().flatten().map(|x| f64::from(*x)).sum::<f64>();
+    let (i32_, i16_) = (sum(&a.indirect), sum(&b.indirect));
+    assert!(i32_.is_finite() && i16_ < 0.5 * i32_, "indirect f32 {i32_:e}, f16 {i16_:e}: the clamp was not reached");
+    eprintln!("indirect light summed: f32 {i32_:e}, f16 (clamped) {i16_:e}; direct f16 vs f32 {d:.2e}");
 }

@@ -242,7 +242,8 @@ pub fn check_device(scene: &Scene, info: &crate::vk::DeviceInfo) -> Result<Memor
 /// says what the scene needs, what the device has and how to need less.
 pub fn check_fits(estimate: &MemoryEstimate, info: &crate::vk::DeviceInfo) -> Result<()> {
     let mib = |b: u64| format!("{:.1} MiB", b as f64 / 1048576.0);
-    let how = "use gi.subsample = 2 or 4, fewer gi.bounces, a lower gi.sh_order, a smaller field or camera";
+    let how = "use gi.storage = \"f16\" (halves V, U and the radiance stack), gi.subsample = 2 or 4, fewer \
+               gi.bounces, a lower gi.sh_order, a smaller field or camera";
     let storage = estimate.buffers.iter().filter(|(n, _)| !n.starts_with("hfgi.view."));
     if let Some((name, b)) = storage.clone().find(|(_, b)| *b > u64::from(info.max_storage_buffer_range)) {
         return Err(Error::param(

@@ -438,7 +438,8 @@ impl HeightPyramid {
         &self.table
     }
     /// The synthesized stack (`channels · stack_levels()` planes of `work()` size, row-major),
-    /// in stack mode.
+    /// in stack mode: f32, or with [`PyramidKind::stack_storage`] f16 halves two to a word
+    /// (glsl/inc/hfgi_store.glsl).
     pub fn stack_buffer(&self) -> Option<&Buffer> {
         self.stack.as_ref()
     }

@@ -301,7 +301,8 @@ impl VisibilityPass {
     pub fn set_kinds(&self) -> Vec<SetKind> {
         self.sets.iter().map(|s| s.kind).collect()
     }
-    /// The V vectors of all sets.
+    /// The V vectors of all sets: sets × receivers × `n²` values in `gi.storage` (f32 words, or
+    /// halves two to a word with each receiver padded to an even count; glsl/inc/hfgi_store.glsl).
     pub fn buffer(&self) -> &Buffer {
         &self.vis
     }
