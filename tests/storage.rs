@@ -32,6 +32,11 @@ fn buffers(ctx: &hfgi::vk::Context, s: &Scene) -> Vec<(String, Vec<f32>)> {
     render_with(ctx, s, |ctx, r| r.debug_buffers(ctx).unwrap())
 }
 
+/// A layer in f64, as `rel_l2` takes its reference.
+fn to64(v: &[[f32; 3]]) -> Vec<[f64; 3]> {
+    v.iter().map(|p| p.map(f64::from)).collect()
+}
+
 fn find<'a>(b: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
     &b.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no buffer {name}")).1
 }
@@ -103,8 +108,7 @@ fn f16_renders_every_mode_like_f32() {
         for (layer, x, y) in
             [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
         {
-            let x64: Vec<[f64; 3]> = x.iter().map(|p| p.map(f64::from)).collect();
-            let d = rel_l2(y, &x64);
+            let d = rel_l2(y, &to64(x));
             assert!(y.iter().flatten().all(|v| v.is_finite()), "{label}: f16 {layer} not finite");
             assert!(d <= 1e-3, "{label}: {layer} f16 vs f32 {d:e}");
             eprintln!("{label}: {layer} f16 vs f32 {d:.2e}");
@@ -133,8 +137,7 @@ fn against_the_reference(file: &str, size: &str, extra: &[&str]) {
         ("total", &a.total, &b.total, &exact.total),
     ] {
         let (e32, e16) = (rel_l2(x, r), rel_l2(y, r));
-        let x64: Vec<[f64; 3]> = x.iter().map(|p| p.map(f64::from)).collect();
-        let d = rel_l2(y, &x64);
+        let d = rel_l2(y, &to64(x));
         eprintln!(
             "{file} {size} {extra:?} {layer}: f32 {:.3}%, f16 {:.3}% (exact); f16 vs f32 {d:.2e}",
             100.0 * e32,
@@ -176,7 +179,6 @@ fn f16_clamps_values_beyond_the_half_range() {
     for (layer, v) in [("direct", &b.direct), ("indirect", &b.indirect), ("total", &b.total)] {
         assert!(v.iter().flatten().all(|x| x.is_finite()), "f16 {layer} is not finite");
     }
-    let to64 = |v: &[[f32; 3]]| v.iter().map(|p| p.map(f64::from)).collect::<Vec<_>>();
     let d = rel_l2(&b.direct, &to64(&a.direct));
     assert!(d <= 1e-3, "direct f16 vs f32 {d:e}");
     let sum = |v: &[[f32; 3]]| v.iter().flatten().map(|x| f64::from(*x)).sum::<f64>();

@@ -29,4 +29,22 @@ uint hfgi_pack_pair(vec2 v, uint old, bool acc) {
 uint hfgi_pack_float(float v, uint old, bool acc) {
     return floatBitsToUint(v + (acc ? uintBitsToFloat(old) : 0.0));
 }
+
+// Stores the values value_at(0) … value_at(count − 1) (`value_at`: a macro of the index) at
+// value `base` of the word array `buf` on, or adds them to what is there when `acc`: one word
+// each with f32; two to a word with f16 (`base` even; an odd count's last word holds 0 in its
+// high half). The one writer of V (visibility pass) and U (indirect scan).
+#define HFGI_STORE(buf, base, count, value_at, acc)                                                 \
+    if (HFGI_HALF != 0u) {                                                                        \
+        for (int hfgi_i = 0; hfgi_i < (count); hfgi_i += 2) {                                      \
+            uint hfgi_o = ((base) + uint(hfgi_i)) >> 1u;                                           \
+            float hfgi_odd = hfgi_i + 1 < (count) ? value_at(min(hfgi_i + 1, (count) - 1)) : 0.0;  \
+            buf[hfgi_o] = hfgi_pack_pair(vec2(value_at(hfgi_i), hfgi_odd), buf[hfgi_o], acc);       \
+        }                                                                                         \
+    } else {                                                                                      \
+        for (int hfgi_i = 0; hfgi_i < (count); ++hfgi_i) {                                         \
+            uint hfgi_o = (base) + uint(hfgi_i);                                                   \
+            buf[hfgi_o] = hfgi_pack_float(value_at(hfgi_i), buf[hfgi_o], acc);                      \
+        }                                                                                         \
+    }
 #endif

@@ -329,18 +329,6 @@ void main() {
     const int count = 3 * HFGI_N2;
     uint out_base = (r.y * pc.work_width + r.x) * hfgi_stride(count);
     bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
-    if (HFGI_HALF != 0u) {
-        for (int i = 0; i < count; i += 2) {
-            uint o = (out_base + uint(i)) >> 1u;
-            int j = min(i + 1, count - 1);
-            vec2 v = vec2(hfgi_U[i / 3][i % 3], i + 1 < count ? hfgi_U[j / 3][j % 3] : 0.0);
-            hfgi_u[o] = hfgi_pack_pair(v, hfgi_u[o], acc);
-        }
-    } else {
-        for (int k = 0; k < HFGI_N2; ++k)
-            for (int c = 0; c < 3; ++c) {
-                uint o = out_base + uint(3 * k + c);
-                hfgi_u[o] = hfgi_pack_float(hfgi_U[k][c], hfgi_u[o], acc);
-            }
-    }
+#define HFGI_U_AT(i) hfgi_U[(i) / 3][(i) % 3]
+    HFGI_STORE(hfgi_u, out_base, count, HFGI_U_AT, acc)
 }

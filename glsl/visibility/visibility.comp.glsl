@@ -156,12 +156,6 @@ void main() {
     uint stride = hfgi_stride(HFGI_N2);
     uint out_base = pc.out_offset + (r.y * pc.work_width + r.x) * stride;
     bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
-    if (HFGI_HALF != 0u) {
-        for (int k = 0; k < HFGI_N2; k += 2) {
-            uint o = (out_base + uint(k)) >> 1u;
-            hfgi_vis[o] = hfgi_pack_pair(vec2(V[k], k + 1 < HFGI_N2 ? V[min(k + 1, HFGI_N2 - 1)] : 0.0), hfgi_vis[o], acc);
-        }
-    } else {
-        for (int k = 0; k < HFGI_N2; ++k) hfgi_vis[out_base + uint(k)] = hfgi_pack_float(V[k], hfgi_vis[out_base + uint(k)], acc);
-    }
+#define HFGI_V_AT(k) V[k]
+    HFGI_STORE(hfgi_vis, out_base, HFGI_N2, HFGI_V_AT, acc)
 }
