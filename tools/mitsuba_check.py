@@ -120,6 +120,18 @@ def init_mitsuba(threads, force_scalar=False):
 def _init_mitsuba(threads, force_scalar):
     import subprocess
 
+    cuda = os.environ.get("MITSUBA_VARIANT", "")
+    if cuda:
+        # A GPU run (tools/gpu-bench): Dr.Jit's CUDA backend and OptiX from the driver; no
+        # LLVM probe, and no fallback -- a failure here is reported, not hidden.
+        if not cuda.startswith("cuda_"):
+            sys.exit(f"MITSUBA_VARIANT={cuda}: only cuda_* variants are chosen this way")
+        import drjit as dr
+        import mitsuba as mi
+
+        mi.set_variant(cuda)
+        log(f"mitsuba {mi.__version__}, variant {cuda} (MITSUBA_VARIANT)")
+        return dr, mi, cuda
     reason = None
     if not force_scalar:
         lib = os.environ.get("DRJIT_LIBLLVM_PATH")

@@ -24,6 +24,7 @@ Usage: tools/peer_ratio.py [--scenes A.toml,B.toml] [--presets paper,draft,defau
                            [--size 0] [--bounces 2] [--frames 3] [--out DIR] [--threads T]
                            [--refine R] [--max-seconds S] [--reuse-bench]
 Needs tools/mitsuba-deps.sh once; HFGI=path picks the hfgi binary (default target/release/hfgi).
+MITSUBA_VARIANT=cuda_ad_rgb runs Mitsuba on the GPU (Dr.Jit CUDA + OptiX; tools/gpu-bench).
 """
 
 import argparse
@@ -188,7 +189,7 @@ def time_config(export_dir, refine, threads, m_d, m_b):
         d = fresh.direct(m_d * m_d, quiet=True)
         fresh.indirect(d, m_b * m_b, quiet=True)
         render = time.time() - t1
-        runs.append((setup + render, setup, render, fresh.tracer.rays))
+        runs.append((setup + render, setup, render, fresh.tracer.rays, fresh.tracer.seconds))
         if setup + render > 20:
             break
     runs.sort()
@@ -196,8 +197,8 @@ def time_config(export_dir, refine, threads, m_d, m_b):
 
 
 def timed(export_dir, args, m_d, m_b, e):
-    secs, setup, render, rays = time_config(export_dir, args.refine, args.threads, m_d, m_b)
-    return dict(m_d=m_d, m_b=m_b, errors=e, seconds=secs, setup=setup, render=render, rays=rays)
+    secs, setup, render, rays, ray_s = time_config(export_dir, args.refine, args.threads, m_d, m_b)
+    return dict(m_d=m_d, m_b=m_b, errors=e, seconds=secs, setup=setup, render=render, rays=rays, ray_s=ray_s)
 
 
 def hfgi_rows(bench_csv):
@@ -283,16 +284,18 @@ def cpu_model():
 
 def write_outputs(out, results, args, cmds, pr):
     pct = lambda e: f"{100 * e:.2f}%"  # noqa: E731
-    cols = ("spp_direct", "spp_bounce", "direct", "indirect", "total", "s", "setup_s", "rays", "ratio")
+    cols = ("spp_direct", "spp_bounce", "direct", "indirect", "total", "s", "setup_s", "rays", "ray_s", "ratio")
     lines = ["scene,preset,width,height,hfgi_ms,hfgi_direct,hfgi_indirect,hfgi_total,"
              + ",".join(f"{c}_{k}" for c in ("every_layer", "total_only") for k in cols)]
     md = [f"Peer ratio: Mitsuba {pr.mi.__version__} ({pr.variant}, {args.threads} Dr.Jit threads, mesh refined "
-          f"{args.refine}x per texel) against hfgi on {results[0]['device']} ({results[0]['driver']}; lavapipe: "
-          f"CPU time), {cpu_model()}, {os.cpu_count()} cores; {args.bounces} bounces; hfgi: median of "
+          f"{args.refine}x per texel) against hfgi on {results[0]['device']} ({results[0]['driver']}"
+          f"{'; lavapipe: CPU time' if 'llvmpipe' in results[0]['device'] else ''}), {cpu_model()}, {os.cpu_count()} cores; {args.bounces} bounces; hfgi: median of "
           f"{args.frames} warm frames, every stage; Mitsuba: mesh build + direct + indirect, warm. "
           "Ratio = Mitsuba time / hfgi time (≥ 1: hfgi at least as fast). *Every layer*: Mitsuba's "
           "direct, indirect and total errors each ≤ hfgi's; *total only*: its total error ≤ hfgi's, "
-          "same samples per texel for the direct pass and each bounce.", "",
+          "same samples per texel for the direct pass and each bounce. *rays*: the seconds inside Mitsuba's "
+          "ray queries alone (the rest is the script's numpy sampling and shading); 'rays only' divides "
+          "those by hfgi's frame, a bound for a path tracer whose sampling and shading cost nothing.", "",
           "| field | preset | hfgi frame (s) | hfgi error: direct / indirect / total | every layer: Mitsuba spp "
           "(direct, per bounce), errors, time (s) | ratio | total only: spp, total error, time (s) | ratio |",
           "|---|---|---|---|---|---|---|---|"]
@@ -307,15 +310,16 @@ def write_outputs(out, results, args, cmds, pr):
             m = r[key]
             if m is None:
                 row_md += [f"not reached within {args.max_seconds:.0f} s per run", f"> {args.max_seconds / hs:.2f}"]
-                row_csv += [""] * 5 + [f">{args.max_seconds}", "", "", ""]
+                row_csv += [""] * 5 + [f">{args.max_seconds}", "", "", "", ""]
                 continue
             e = m["errors"]
             ratio = m["seconds"] / hs
             ratios[key].append(ratio)
             errs = " / ".join(pct(e[k]) for k in LAYERS) if key == "mitsuba" else pct(e["total"])
-            row_md += [f"{m['m_d'] ** 2}, {m['m_b'] ** 2}; {errs}; {m['seconds']:.3f}", f"**{ratio:.3f}**"]
+            row_md += [f"{m['m_d'] ** 2}, {m['m_b'] ** 2}; {errs}; {m['seconds']:.3f} (rays {m['ray_s']:.3f})",
+                       f"**{ratio:.3f}** (rays only {m['ray_s'] / hs:.3f})"]
             row_csv += [str(m["m_d"] ** 2), str(m["m_b"] ** 2)] + [f"{e[k]:.6e}" for k in LAYERS] + [
-                f"{m['seconds']:.4f}", f"{m['setup']:.4f}", str(m["rays"]), f"{ratio:.4f}"]
+                f"{m['seconds']:.4f}", f"{m['setup']:.4f}", str(m["rays"]), f"{m['ray_s']:.4f}", f"{ratio:.4f}"]
         md.append("| " + " | ".join(row_md) + " |")
         lines.append(",".join(row_csv))
     for key, label in (("mitsuba", "every layer"), ("total_only", "total only")):
