@@ -4,7 +4,7 @@
 mod common;
 
 use common::scenes::{rel_l2, scene, sky, uniform};
-use common::{gpu, rough_field};
+use common::{gpu, render_with, rough_field};
 use hfgi::frame::{Renderer, ShadingLayers};
 use hfgi::reference::indirect::render_gi;
 use hfgi::scene::model::{Albedo, GlossyPyramid, Interpolation, PyramidMode, Scene};
@@ -342,4 +342,38 @@ fn gpu_matches_cpu_with_radial_probes_on_spikes() {
     let change = rel_l2(&with.indirect, &without.indirect.iter().map(|v| v.map(f64::from)).collect::<Vec<_>>());
     eprintln!("probes change the indirect light by {change:.2e} (relative L2)");
     assert!(change > 1e-2, "the probes changed the indirect light by only {change:e}");
+}
+
+/// What the next bounce gathers (docs/indirect.md §1): the bounce buffer holds, rgb per texel,
+/// the last bounce's diffuse + glossy exit radiance with the scalar pyramid, and the diffuse
+/// part alone with the vector pyramid (which carries the glossy light as T). After one bounce
+/// the indirect planes hold exactly that bounce's exit radiance, so they are the expectation.
+#[test]
+fn the_bounce_buffer_holds_what_the_next_bounce_gathers() {
+    let ctx = gpu();
+    let (w, h) = (20, 17);
+    let mut s = bright(rough_field(w, h, 3));
+    s.gi.bounces = 1;
+    s.material.specular = Some([0.3; 3]);
+    s.material.exponent = 8.0;
+    for vector in [false, true] {
+        s.gi.glossy_pyramid = if vector { GlossyPyramid::Vector } else { GlossyPyramid::Scalar };
+        let b = render_with(&ctx, &s, |ctx, r| r.debug_buffers(ctx).unwrap());
+        let get = |name: &str| &b.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no buffer {name}")).1;
+        let (bounce, diffuse, glossy) = (get("indirect.bounce"), get("shade.indirect"), get("shade.glossy_indirect"));
+        assert_eq!(bounce.len(), 3 * w * h, "rgb per texel");
+        let mut max_glossy = 0.0f32;
+        for t in 0..w * h {
+            for c in 0..3 {
+                let want = diffuse[4 * t + c] + if vector { 0.0 } else { glossy[4 * t + c] };
+                let got = bounce[3 * t + c];
+                assert!(
+                    (got - want).abs() <= 1e-6 * want.abs().max(1.0),
+                    "vector {vector}, texel {t}: {got} vs {want}"
+                );
+                max_glossy = max_glossy.max(glossy[4 * t + c]);
+            }
+        }
+        assert!(max_glossy > 1e-3, "the glossy light must be there to tell the two apart: {max_glossy}");
+    }
 }

@@ -38,7 +38,7 @@ layout(std430, binding = 5) readonly buffer Consts {
     uint hfgi_triple_count;
 };
 layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // HFGI_PLANES planes × W×H
-layout(std430, binding = 7) writeonly buffer Bounce { vec4 hfgi_bounce[]; };  // indirect: this bounce's diffuse, glossy planes
+layout(std430, binding = 7) writeonly buffer Bounce { float hfgi_bounce[]; }; // indirect: the next bounce's radiance, rgb per texel
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
 layout(std430, binding = 9) readonly buffer Blockers { float hfgi_bv[]; };     // receivers × n² (× 2 in log mode)
 layout(std430, binding = 10) readonly buffer BSpheres { vec4 hfgi_spheres[]; }; // per slot: (c_hi, r), (c_lo, 0)
@@ -258,9 +258,11 @@ void main() {
     uint at_direct = HFGI_PLANE_DIRECT * plane + idx, at_indirect = HFGI_PLANE_INDIRECT * plane + idx;
     uint at_gd = HFGI_PLANE_GLOSSY_DIRECT * plane + idx, at_gi = HFGI_PLANE_GLOSSY_INDIRECT * plane + idx;
     if (HFGI_INDIRECT != 0) {
-        // `direct` and `glossy` hold this bounce's diffuse and glossy exit radiance.
-        hfgi_bounce[idx] = vec4(direct, 1.0); // the next bounce's radiance (§5.3)
-        hfgi_bounce[plane + idx] = vec4(glossy, 1.0);
+        // `direct` and `glossy` hold this bounce's diffuse and glossy exit radiance; the next
+        // bounce's radiance pyramid (§5.3) gathers their sum (the scalar approximation for
+        // mixtures), or the diffuse part alone beside T (glossy vector pyramid).
+        vec3 next = HFGI_STORE_T != 0 ? direct : direct + glossy;
+        for (uint c = 0u; c < 3u; ++c) hfgi_bounce[3u * idx + c] = next[c];
         if (pc.accumulate != 0u) {
             direct += hfgi_out[at_indirect].rgb;
             glossy += hfgi_out[at_gi].rgb;

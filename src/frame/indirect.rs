@@ -115,7 +115,8 @@ pub(crate) fn buffer_sizes(
         ("hfgi.indirect.fold", fold as u64 * 4),
         ("hfgi.indirect.radiance_level", ladder as u64 * 4),
         ("hfgi.indirect.u", u_bytes),
-        ("hfgi.indirect.bounce", (2 * w * h * 16) as u64),
+        // The next bounce's radiance: rgb f32 per texel (glsl/shade/direct.comp.glsl).
+        ("hfgi.indirect.bounce", (w * h * 12) as u64),
         ("hfgi.indirect.incident", if vector_pyramid(scene) { (w * h * n * n * 16) as u64 } else { 16 }),
     ]
     .map(|(name, size)| (name, size.max(16)))
@@ -392,8 +393,9 @@ impl IndirectPass {
         super::storage::download_vectors(ctx, &self.buffers[U], self.storage, 0, receivers, values)
     }
 
-    /// Diagnostics: the bounce buffer, the last bounce's diffuse and glossy exit radiance (two
-    /// `W × H` planes of `vec4`), read back (waits).
+    /// Diagnostics: the bounce buffer, the radiance the last bounce leaves for the next one to
+    /// gather (rgb per texel, `W × H`: its diffuse + glossy exit radiance, or the diffuse part
+    /// alone with the glossy vector pyramid), read back (waits).
     pub fn read_bounce(&self, ctx: &Context) -> Result<Vec<f32>> {
         let b = &self.buffers[BOUNCE];
         memory::download_f32(ctx, b, 0, b.size / 4)

@@ -352,8 +352,8 @@ impl Renderer {
     ///   `indirect`, `glossy`, `glossy_direct`, `glossy_indirect`), raw `vec4`s (w = 1), and
     ///   `shade.incident` (`T` per texel) with the glossy vector pyramid;
     /// - with indirect light: `radiance.levels` (every channel), `radiance.stack` (stack mode),
-    ///   `indirect.u` (the last bounce's `U`), `indirect.bounce` (its diffuse and glossy exit
-    ///   radiance) and, with the vector pyramid, `indirect.incident`.
+    ///   `indirect.u` (the last bounce's `U`), `indirect.bounce` (the radiance it leaves for
+    ///   a next bounce, rgb per texel) and, with the vector pyramid, `indirect.incident`.
     ///
     /// Call after a recorded frame has completed (before it, buffers that no frame wrote yet
     /// hold undefined values). For tests and debugging; not part of a frame.

@@ -272,7 +272,8 @@ pub struct IndirectPush {
 pub struct GatherPush {
     pub width: u32,
     pub height: u32,
-    /// 0: bounce 1 reads the direct exit radiance (shade planes 1 + 4); 1: the bounce buffer.
+    /// 0: bounce 1 reads the direct exit radiance (shade planes 1 + 4); 1: the bounce buffer
+    /// (rgb per texel, summed by the indirect shade).
     pub from_bounce: u32,
     /// Floats per channel in the radiance levels buffer (`PyramidLayout::total`).
     pub channel_stride: u32,
