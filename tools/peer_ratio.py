@@ -287,7 +287,8 @@ def write_outputs(out, results, args, cmds, pr):
     cols = ("spp_direct", "spp_bounce", "direct", "indirect", "total", "s", "setup_s", "rays", "ray_s", "ratio")
     lines = ["scene,preset,width,height,hfgi_ms,hfgi_direct,hfgi_indirect,hfgi_total,"
              + ",".join(f"{c}_{k}" for c in ("every_layer", "total_only") for k in cols)]
-    md = [f"Peer ratio: Mitsuba {pr.mi.__version__} ({pr.variant}, {args.threads} Dr.Jit threads, mesh refined "
+    threads = "" if pr.variant.startswith("cuda") else f", {args.threads} Dr.Jit threads"
+    md = [f"Peer ratio: Mitsuba {pr.mi.__version__} ({pr.variant}{threads}, mesh refined "
           f"{args.refine}x per texel) against hfgi on {results[0]['device']} ({results[0]['driver']}"
           f"{'; lavapipe: CPU time' if 'llvmpipe' in results[0]['device'] else ''}), {cpu_model()}, {os.cpu_count()} cores; {args.bounces} bounces; hfgi: median of "
           f"{args.frames} warm frames, every stage; Mitsuba: mesh build + direct + indirect, warm. "
