@@ -4,7 +4,7 @@
 mod common;
 
 use common::scenes::{rel_l2, scene, sky, uniform};
-use common::{gpu, render_with, rough_field};
+use common::{debug_buffers, find_buffer, gpu, rough_field};
 use hfgi::frame::{Renderer, ShadingLayers};
 use hfgi::reference::indirect::render_gi;
 use hfgi::scene::model::{Albedo, GlossyPyramid, Interpolation, PyramidMode, Scene};
@@ -358,8 +358,8 @@ fn the_bounce_buffer_holds_what_the_next_bounce_gathers() {
     s.material.exponent = 8.0;
     for vector in [false, true] {
         s.gi.glossy_pyramid = if vector { GlossyPyramid::Vector } else { GlossyPyramid::Scalar };
-        let b = render_with(&ctx, &s, |ctx, r| r.debug_buffers(ctx).unwrap());
-        let get = |name: &str| &b.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no buffer {name}")).1;
+        let b = debug_buffers(&ctx, &s);
+        let get = |name: &str| find_buffer(&b, name);
         let (bounce, diffuse, glossy) = (get("indirect.bounce"), get("shade.indirect"), get("shade.glossy_indirect"));
         assert_eq!(bounce.len(), 3 * w * h, "rgb per texel");
         let mut max_glossy = 0.0f32;

@@ -16,7 +16,7 @@ mod common;
 use std::path::Path;
 
 use common::scenes::{key_light, rel_l2, scene};
-use common::{gpu, render_layers, render_with, rough_field};
+use common::{debug_buffers, find_buffer, gpu, render_layers, rough_field};
 use hfgi::frame::truth::render_truth_gpu;
 use hfgi::reference::truth::TruthSettings;
 use hfgi::scene::model::{Scene, Storage};
@@ -27,18 +27,9 @@ fn with_storage(s: &Scene, storage: Storage) -> Scene {
     s
 }
 
-/// The named debug buffers (`Renderer::debug_buffers`) of one frame.
-fn buffers(ctx: &hfgi::vk::Context, s: &Scene) -> Vec<(String, Vec<f32>)> {
-    render_with(ctx, s, |ctx, r| r.debug_buffers(ctx).unwrap())
-}
-
 /// A layer in f64, as `rel_l2` takes its reference.
 fn to64(v: &[[f32; 3]]) -> Vec<[f64; 3]> {
     v.iter().map(|p| p.map(f64::from)).collect()
-}
-
-fn find<'a>(b: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
-    &b.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no buffer {name}")).1
 }
 
 #[test]
@@ -51,10 +42,10 @@ fn f16_vectors_are_the_f32_vectors_rounded() {
         s.gi.azimuths = 16;
         s.gi.bounces = 1;
         s.key_lights = vec![key_light(35.0, 60.0, 4.0, 3.0)];
-        let a = buffers(&ctx, &with_storage(&s, Storage::F32));
-        let b = buffers(&ctx, &with_storage(&s, Storage::F16));
+        let a = debug_buffers(&ctx, &with_storage(&s, Storage::F32));
+        let b = debug_buffers(&ctx, &with_storage(&s, Storage::F16));
         for name in ["visibility.v.environment", "visibility.v.key0"] {
-            let (x, y) = (find(&a, name), find(&b, name));
+            let (x, y) = (find_buffer(&a, name), find_buffer(&b, name));
             assert_eq!(x.len(), y.len(), "n = {n}: {name}");
             assert!(x.iter().any(|v| v.abs() > 1e-3), "n = {n}: {name} is empty");
             for (i, (v32, v16)) in x.iter().zip(y).enumerate() {
@@ -67,7 +58,7 @@ fn f16_vectors_are_the_f32_vectors_rounded() {
         // The radiance stack (planes of odd size: a word may hold two planes' values) and U
         // come from the shading of f16 V: within 1e-3 (relative L2) of the f32 pipeline's.
         for name in ["radiance.stack", "indirect.u"] {
-            let (x, y) = (find(&a, name), find(&b, name));
+            let (x, y) = (find_buffer(&a, name), find_buffer(&b, name));
             assert_eq!(x.len(), y.len(), "n = {n}: {name}");
             let e = (x.iter().zip(y).map(|(p, q)| ((p - q) as f64).powi(2)).sum::<f64>()
                 / x.iter().map(|p| (*p as f64).powi(2)).sum::<f64>())

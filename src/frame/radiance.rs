@@ -5,9 +5,9 @@
 //!
 //! Input: bounce 1 reads the direct exit radiance (shading planes `direct` + direct glossy:
 //! the paper's scalar approximation for mixtures); bounce `b > 1` reads the bounce buffer the
-//! previous indirect shade wrote (rgb per texel, that sum already formed). Output: the levels (and stack) buffers of
-//! [`RadiancePyramid::pyramid`], table entries with `source = 1`. Barriers: compute→compute
-//! after each stage.
+//! previous indirect shade wrote (rgb per texel, that sum already formed). Output: the levels
+//! (and stack) buffers of [`RadiancePyramid::pyramid`], table entries with `source = 1`.
+//! Barriers: compute→compute after each stage.
 
 use ash::vk;
 

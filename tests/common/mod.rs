@@ -137,3 +137,13 @@ pub fn render_with<T>(
     r.destroy(ctx);
     out
 }
+
+/// The named debug buffers (`Renderer::debug_buffers`) of one frame of `scene`.
+pub fn debug_buffers(ctx: &Context, scene: &hfgi::scene::model::Scene) -> Vec<(String, Vec<f32>)> {
+    render_with(ctx, scene, |ctx, r| r.debug_buffers(ctx).unwrap())
+}
+
+/// The values of debug buffer `name` (panics naming it when absent).
+pub fn find_buffer<'a>(buffers: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
+    &buffers.iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no buffer {name}")).1
+}
