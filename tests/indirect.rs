@@ -344,6 +344,31 @@ fn gpu_matches_cpu_with_radial_probes_on_spikes() {
     assert!(change > 1e-2, "the probes changed the indirect light by only {change:e}");
 }
 
+/// Later bounces with their own, smaller azimuth set (`gi.azimuths_later`, docs/performance.md
+/// §12), on a non-square field with heights below zero: GPU = twin for 2 and 3 bounces (the
+/// later set serves bounces 2 and 3), and the later set changes the light (the GPU differs from
+/// the twin that scans every bounce with the full set), so neither side can ignore it.
+#[test]
+fn gpu_matches_cpu_with_fewer_azimuths_in_later_bounces() {
+    let ctx = gpu();
+    let f = rough_field(26, 19, 5);
+    let data: Vec<f32> = f.data().iter().map(|h| h - 7.0).collect();
+    let mut s = bright(HeightField::new("rough", 26, 19, data, 4096).unwrap());
+    s.gi.azimuths_later = 4;
+    for bounces in [2, 3] {
+        s.gi.bounces = bounces;
+        compare(&ctx, &s, &format!("16 azimuths, 4 in later bounces, {bounces} bounces"));
+    }
+    s.gi.bounces = 2;
+    let (g, _) = render_gpu(&ctx, &s);
+    let mut full = s.clone();
+    full.gi.azimuths_later = 16;
+    let c = render_gi(&full).unwrap();
+    let change = rel_l2(&g.indirect, &c.indirect);
+    eprintln!("4 instead of 16 azimuths in bounce 2 change the indirect light by {change:.2e} (relative L2)");
+    assert!(change > 5e-3, "the later bounce's azimuth set changed the indirect light by only {change:e}");
+}
+
 /// What the next bounce gathers (docs/indirect.md §1): the bounce buffer holds, rgb per texel,
 /// the last bounce's diffuse + glossy exit radiance with the scalar pyramid, and the diffuse
 /// part alone with the vector pyramid (which carries the glossy light as T). After one bounce

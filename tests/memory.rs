@@ -73,6 +73,8 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
             with(&["gi.blocker_shading=\"primal\"", "gi.sh_order=6"]),
         ),
         ("f16, subsample 4, 3 bounces", "", with(&["gi.storage=\"f16\"", "gi.subsample=4", "gi.bounces=3"])),
+        // The later bounces' own azimuth set: more samples and fold matrices.
+        ("later bounces, 8 azimuths", "", with(&["gi.bounces=2", "gi.azimuths_later=8"])),
         ("f16, sh order 3 (odd n²)", "", with(&["gi.storage=\"f16\"", "gi.sh_order=3", "gi.bounces=1"])),
         (
             "f16, spheres, log_field",

@@ -320,6 +320,15 @@ fn quality_presets_resolve_every_knob_and_explicit_knobs_override_them() {
         assert!(b.azimuths > a.azimuths && b.level_step >= a.level_step && b.level_offset >= a.level_offset);
         assert!(b.near_steps > a.near_steps && b.subsample <= a.subsample && b.sh_order >= a.sh_order);
     }
+    // The later bounces' azimuths: every preset's m, capped at an explicit smaller m, or set.
+    for g in &ladder {
+        assert_eq!(g.azimuths_later, g.azimuths, "{:?}", g.quality);
+    }
+    assert_eq!((h.azimuths_later, h.scan_azimuths(1), h.scan_azimuths(2)), (64, 24, 24));
+    let l = parse("[gi]\nazimuths_later = 8\n").unwrap().gi;
+    assert_eq!((l.scan_azimuths(1), l.scan_azimuths(2), l.scan_azimuths(3)), (32, 8, 8));
+    let err = parse("[gi]\nazimuths_later = 3\n").unwrap_err().to_string();
+    assert!(err.contains("gi.azimuths_later") && err.contains("4..=256"), "{err}");
     let err = parse("[gi]\nquality = \"best\"\n").unwrap_err().to_string();
     assert!(err.contains("gi.quality") && err.contains("ultra"), "{err}");
     let err = parse("[gi]\nnear_steps = 65\n").unwrap_err().to_string();

@@ -138,6 +138,11 @@ fn configs(base: &GiSettings, quick: bool, base_wraps: bool, content: Content) -
     for &m in ms {
         push("azimuths", &|g| g.azimuths = m);
     }
+    // The later bounces' azimuths (at most m; docs/performance.md §12).
+    let later: &[u32] = if quick { &[8] } else { &[4, 8, 16, 32, 64] };
+    for &m in later {
+        push("azimuths_later", &|g| g.azimuths_later = m);
+    }
     let ks: &[u32] = if quick { &[2] } else { &[1, 2, 4, 8, 16] };
     for &k in ks {
         push("level_step", &|g| g.level_step = k);
@@ -456,9 +461,14 @@ fn settings_label(g: &GiSettings) -> String {
     } else {
         String::new()
     };
+    // The later bounces' azimuths when they differ from m: `m=32/16`.
+    let m = match g.scan_azimuths(2) {
+        later if g.bounces > 1 && later != g.azimuths => format!("{}/{later}", g.azimuths),
+        _ => g.azimuths.to_string(),
+    };
     format!(
-        "n={} m={} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}{blockers}",
-        g.sh_order, g.azimuths, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
+        "n={} m={m} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}{blockers}",
+        g.sh_order, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
 }
 

@@ -214,6 +214,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
     uint lv = 0u;
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
     bool more = true;
+    float t_next = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
     while (more) {
         bool found = false;
         float sp = 0.0;
@@ -225,7 +226,8 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
                 break;
             }
             if (np < 0) {
-                t = hfgi_scan_t(scan, i, HFGI_NV);
+                t = t_next;
+                t_next *= ratio;
                 q = scan.p + t * d;
                 if (!hfgi_scan_inside(scan, q)) {
                     more = false;

@@ -47,10 +47,11 @@ float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
     int count = 0;
     float limit;
     if (scan.first < 0 && hfgi_scan_limit(scan, d, limit)) wmax = limit;
-    for (int i = scan.first; i < scan.end; ++i) {
+    float t = hfgi_scan_t(scan, scan.first, HFGI_NV), ratio = hfgi_scan_ratio(scan);
+    for (int i = scan.first; i < scan.end; ++i, t *= ratio) {
         vec2 q;
         float omega;
-        if (!hfgi_scan_sample(scan, i, HFGI_NV, d, hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)], q, omega))
+        if (!hfgi_scan_sample(scan, i, t, HFGI_NV, d, hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)], q, omega))
             break;
         if (samples_max || i < 0 || i >= HFGI_NV) {
             wmax = max(wmax, omega);

@@ -47,7 +47,8 @@ pub struct IndirectPass {
     /// `gi.radial_probes_later` (`push.probes` is the first bounce's).
     probes_later: u32,
     /// Azimuth chunks `(first, count)`, one dispatch each: of the first bounce's scan and of
-    /// the later ones' (their probes differ, and a probe is a loop iteration like a sample).
+    /// the later ones' (their probes and azimuth sets may differ, and a probe is a loop
+    /// iteration like a sample).
     chunks: [Vec<(u32, u32)>; 2],
     shade_push: ShadePush,
     /// SH order and `gi.storage` of `U` (for [`IndirectPass::read_u`]).
@@ -55,23 +56,31 @@ pub struct IndirectPass {
     storage: Storage,
 }
 
-/// What the scan uploads, from the scene: the environment set's azimuth samples
-/// (`[cos φ, sin φ, 0, 0]`), its folded wedge matrices and the scan's step ladder for `n_v`
-/// height levels (one source for the pass and [`crate::frame::memory`]).
+/// What the scan uploads, from the scene: the azimuth samples (`[cos φ, sin φ, 0, 0]`) and
+/// folded wedge matrices of the first bounce's set (`gi.azimuths`) and, when later bounces use
+/// fewer (`gi.azimuths_later`), of theirs after it; and the scan's step ladder for `n_v` height
+/// levels (one source for the pass and [`crate::frame::memory`]).
 pub(crate) struct ScanData {
     pub samples: Vec<[f32; 4]>,
     pub fold: Vec<f32>,
     pub ladder: Vec<f64>,
+    /// The samples `(first, count)` of the first bounce's scan and of the later ones'.
+    pub sets: [(u32, u32); 2],
 }
 
 impl ScanData {
     pub(crate) fn new(scene: &Scene, n_v: usize) -> Self {
         let gi = &scene.gi;
-        let set = azimuth::environment_set(gi.azimuths as usize, gi.interpolation);
-        let samples: Vec<[f32; 4]> = set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]).collect();
-        let fold = super::shared::gpu_fold(gi.sh_order, &set, gi);
-        let ladder = scan_steps(gi, n_v);
-        Self { samples, fold, ladder }
+        let (first, later) = (gi.azimuths, gi.scan_azimuths(2));
+        let own_later = gi.bounces > 1 && later != first;
+        let (mut samples, mut fold) = (Vec::new(), Vec::new());
+        for m in if own_later { vec![first, later] } else { vec![first] } {
+            let set = azimuth::environment_set(m as usize, gi.interpolation);
+            samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
+            fold.extend(super::shared::gpu_fold(gi.sh_order, &set, gi)); // n² × NE per sample
+        }
+        let sets = [(0, first), if own_later { (first, later) } else { (0, first) }];
+        Self { samples, fold, ladder: scan_steps(gi, n_v), sets }
     }
 
     /// The radiance level of every scan sample: [`radiance_levels`] of this ladder.
@@ -169,7 +178,7 @@ impl IndirectPass {
         let vector = vector_pyramid(scene);
         let data = ScanData::new(scene, pyramid.layout().count());
         let levels = data.radiance_levels(scene)?;
-        let ScanData { samples, fold, ladder } = data;
+        let ScanData { samples, fold, ladder, sets } = data;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
@@ -197,7 +206,7 @@ impl IndirectPass {
                     incident_bounce: &bufs[INCIDENT],
                 },
             )?);
-            let push = scan_push(scene, (ww, wh), samples.len() as u32, rad);
+            let push = scan_push(scene, (ww, wh), sets[0].1, rad);
             let layout = pyramid.layout();
             if uses_max_bound(scene) {
                 max = Some(MaxPyramid::new(ctx, pyramid)?);
@@ -304,10 +313,11 @@ impl IndirectPass {
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
-            chunks: [gi.radial_probes, gi.radial_probes_later].map(|p| {
+            chunks: [(gi.radial_probes, sets[0]), (gi.radial_probes_later, sets[1])].map(|(p, (first, count))| {
                 // A member adds an outer iteration of the scan's while-while loop and an e-vector.
                 let cost = ladder.len() * (1 + p as usize) * (e + 1) + n * n * e;
-                azimuth_chunks(push.sample_count, cost as u32, INDIRECT_LOOP_BUDGET)
+                let chunks = azimuth_chunks(count, cost as u32, INDIRECT_LOOP_BUDGET);
+                chunks.into_iter().map(|(f, c)| (first + f, c)).collect()
             }),
             push,
             probes_later: gi.radial_probes_later,

@@ -208,6 +208,8 @@ pub struct Planner {
     radiance_stack_levels: usize,
     environment: bool,
     azimuths: u32,
+    /// The indirect scans' azimuths of bounces 2 and later (`gi.azimuths_later`, at most m).
+    azimuths_later: u32,
     key_lights: usize,
     key_light_azimuths: u32,
     local_lights: usize,
@@ -260,6 +262,7 @@ impl Planner {
             radiance_stack_levels: radiance_stack,
             environment: has_environment(scene),
             azimuths: gi.azimuths,
+            azimuths_later: gi.scan_azimuths(2),
             key_lights: scene.key_lights.len(),
             key_light_azimuths: gi.key_light_azimuths,
             local_lights: scene.local_lights.len(),
@@ -473,7 +476,8 @@ impl Planner {
                     };
                     add(&mut omitted, Stage::RadianceSynthesize(0), why.into());
                 }
-                let r = format!("{of}: IR vector per receiver ({} azimuths)", self.azimuths);
+                let m = if b == 1 { self.azimuths } else { self.azimuths_later };
+                let r = format!("{of}: IR vector per receiver ({m} azimuths)");
                 add(&mut stages, Stage::IndirectScan(b), r);
                 let acc = if b == 1 { "writes the indirect planes" } else { "adds to the indirect planes" };
                 add(&mut stages, Stage::IndirectShade(b), format!("{of}: {acc}"));

@@ -190,8 +190,12 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let mut scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let tangent = gi.omega_min == OmegaMin::Tangent;
-    let set = environment_set(gi.azimuths as usize, gi.interpolation);
-    let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
+    // The first bounce's azimuth set and the later bounces' (`gi.azimuths_later`).
+    let sets = [1, 2].map(|b| {
+        let set = environment_set(gi.scan_azimuths(b) as usize, gi.interpolation);
+        let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
+        (set, mats)
+    });
     let lobes = Lobes::new(scene);
     let nrm = normals(scene);
     let tri = crate::math::triple::triple(n);
@@ -210,6 +214,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let mut glossy_bounces = Vec::new();
     for bounce in 1..=gi.bounces {
         scan.probes = gi.probes(bounce) as usize;
+        let (set, mats) = &sets[(bounce > 1) as usize];
         let mut images: Vec<Vec<f64>> = if vector {
             (0..3).map(|c| diffuse_src.iter().map(|v| v[c]).collect()).collect()
         } else {
@@ -249,7 +254,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
                     .collect();
                 [0, 1, 2].map(|c| {
                     let v: Vec<Vec<f64>> = per_phi.iter().map(|u| u[c].clone()).collect();
-                    accumulate_with(n, &set, &mats, &v)
+                    accumulate_with(n, set, mats, &v)
                 })
             })
             .collect();

@@ -335,8 +335,13 @@ pub fn check_local_wrap(wrap: bool, local_lights: usize) -> Result<()> {
 pub struct GiSettings {
     /// SH order n (bands 0..n−1, n² coefficients), 2..=8.
     pub sh_order: usize,
-    /// Azimuthal samples m for environment visibility (and indirect), 4..=256.
+    /// Azimuthal samples m for environment visibility and the first bounce's indirect scan,
+    /// 4..=256.
     pub azimuths: u32,
+    /// Azimuthal samples of the indirect scans of bounces 2 and later, 4..=256, at most
+    /// [`GiSettings::azimuths`] ([`GiSettings::scan_azimuths`]): later bounces carry less light
+    /// (docs/performance.md §12).
+    pub azimuths_later: u32,
     /// Azimuthal samples per key light, 2..=64.
     pub key_light_azimuths: u32,
     /// Azimuthal samples per local light and receiver, 2..=64 (docs/local-lights.md).
@@ -416,13 +421,14 @@ impl GiSettings {
     /// which lowers the SH truncation floor against the exact reference; an order-4 environment
     /// is used as given, its higher bands zero).
     pub fn preset(q: Quality) -> Self {
-        // (n, m, k, o, sub-sampling, k_u, o_u, near steps, radial probes: first bounce, later)
-        let (n, m, k, o, sub, ku, ou, near, probes) = match q {
-            Quality::Draft => (4, 16, 2, 4, 2, 2, 2, 2, (0, 0)),
-            Quality::Default => (4, 32, 4, 6, 1, 4, 4, 4, (2, 0)),
-            Quality::Paper => (4, 32, 4, 2, 1, 4, 2, 0, (0, 0)),
-            Quality::High => (6, 64, 12, 8, 1, 8, 6, 16, (4, 0)),
-            Quality::Ultra => (8, 128, 24, 8, 1, 16, 8, 64, (0, 0)),
+        // (n, m: first bounce and later, k, o, sub-sampling, k_u, o_u, near steps, radial
+        // probes: first bounce, later)
+        let (n, (m, m_later), k, o, sub, ku, ou, near, probes) = match q {
+            Quality::Draft => (4, (16, 16), 2, 4, 2, 2, 2, 2, (0, 0)),
+            Quality::Default => (4, (32, 32), 4, 6, 1, 4, 4, 4, (2, 0)),
+            Quality::Paper => (4, (32, 32), 4, 2, 1, 4, 2, 0, (0, 0)),
+            Quality::High => (6, (64, 64), 12, 8, 1, 8, 6, 16, (4, 0)),
+            Quality::Ultra => (8, (128, 128), 24, 8, 1, 16, 8, 64, (0, 0)),
         };
         // Azimuths per local light (docs/local-lights.md §5: direct error 0.13–0.9% at 8,
         // 0.02–0.26% at 16 on the hard fields).
@@ -436,6 +442,7 @@ impl GiSettings {
         Self {
             sh_order: n,
             azimuths: m,
+            azimuths_later: m_later,
             key_light_azimuths: 3,
             local_light_azimuths: local,
             level_step: k,
@@ -497,7 +504,7 @@ impl GiSettings {
         format!(
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
-             radial_probes={} radial_probes_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
+             radial_probes={} radial_probes_later={} azimuths_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
              local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={}",
             self.quality,
             self.sh_order,
@@ -514,6 +521,7 @@ impl GiSettings {
             self.near_steps,
             self.radial_probes,
             self.radial_probes_later,
+            self.azimuths_later,
             self.scan_reach,
             self.omega_min,
             self.elevation_basis,
@@ -538,6 +546,16 @@ impl GiSettings {
             self.radial_probes
         } else {
             self.radial_probes_later
+        }
+    }
+
+    /// Azimuths of bounce `bounce`'s indirect scan (1-based): [`GiSettings::azimuths`] for the
+    /// first, [`GiSettings::azimuths_later`] (at most `azimuths`) for the later ones.
+    pub fn scan_azimuths(&self, bounce: u32) -> u32 {
+        if bounce <= 1 {
+            self.azimuths
+        } else {
+            self.azimuths_later.min(self.azimuths)
         }
     }
 
@@ -951,6 +969,7 @@ impl GiSettings {
         };
         check("gi.sh_order", u32::try_from(self.sh_order).unwrap_or(u32::MAX), 2, crate::constants::MAX_SH_ORDER)?;
         check("gi.azimuths", self.azimuths, 4, 256)?;
+        check("gi.azimuths_later", self.azimuths_later, 4, 256)?;
         check("gi.key_light_azimuths", self.key_light_azimuths, 2, 64)?;
         check("gi.local_light_azimuths", self.local_light_azimuths, 2, 64)?;
         check("gi.level_step", self.level_step, 1, 32)?;
