@@ -19,6 +19,9 @@ layout(constant_id = 5) const uint HFGI_WRAP = 0u;
 layout(constant_id = 6) const uint HFGI_STATIC_FLAGS = 0u;
 layout(constant_id = 7) const uint HFGI_RSTACK = 1u;
 layout(constant_id = 8) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_store.glsl)
+// 0: the pipeline of bounces without the max-pyramid bound: its code is compiled out, not just
+// skipped (lavapipe runs a skipped branch on every lane; docs/performance.md §12).
+layout(constant_id = 9) const uint HFGI_BOUND = 1u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -294,7 +297,7 @@ void main() {
         hfgi_base[l] = hfgi_scan_base(scan, uint(l));
         bmin = min(bmin, hfgi_base[l]);
     }
-    bool bounded = (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
+    bool bounded = HFGI_BOUND != 0u && (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
     float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     radiance_begin(scan.work);
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);

@@ -38,8 +38,9 @@ pub struct IndirectPass {
     pub radiance: RadiancePyramid,
     /// The max pyramid the scan's bound reads ([`uses_max_bound`]).
     pub max: Option<MaxPyramid>,
-    scan: ComputePipeline,
-    scan_set: vk::DescriptorSet,
+    /// The scan's pipelines with their sets, by whether their dispatches use the max-pyramid
+    /// bound ([`bounded`]): one per kind the scene's bounces need.
+    scans: Vec<(bool, ComputePipeline, vk::DescriptorSet)>,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
     buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce, incident
@@ -72,7 +73,7 @@ impl ScanData {
     pub(crate) fn new(scene: &Scene, n_v: usize) -> Self {
         let gi = &scene.gi;
         let (first, later) = (gi.azimuths, gi.scan_azimuths(2));
-        let own_later = gi.bounces > 1 && later != first;
+        let own_later = later != first; // whatever gi.bounces: a host may record more bounces
         let (mut samples, mut fold) = (Vec::new(), Vec::new());
         for m in if own_later { vec![first, later] } else { vec![first] } {
             let set = azimuth::environment_set(m as usize, gi.interpolation);
@@ -157,6 +158,14 @@ fn scan_push(scene: &Scene, (ww, wh): (u32, u32), sample_count: u32, rad: &Radia
     }
 }
 
+/// Whether a bounce's scan reads the max-pyramid bound: the pass has the max pyramid and the
+/// bounce probes. The bound pays where it saves probes; without probes it costs more than it
+/// saves (docs/accuracy.md §4), and its pipeline is then compiled without it (§12 of
+/// docs/performance.md).
+fn bounded(has_max: bool, probes: u32) -> bool {
+    has_max && probes > 0
+}
+
 const U: usize = 3;
 const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
@@ -186,7 +195,14 @@ impl IndirectPass {
         let mut pipes: Vec<ComputePipeline> = Vec::new();
         let mut radiance = None;
         let mut max = None;
-        let made = (|| -> Result<(vk::DescriptorSet, vk::DescriptorSet, IndirectPush)> {
+        // The scan pipelines: bounded and/or unbounded, as the scene's bounces' probes ask
+        // (record_scan; a bounce past gi.bounces takes the first, which scans it exactly).
+        let has_max = uses_max_bound(scene);
+        let mut kinds = vec![bounded(has_max, gi.radial_probes)];
+        if gi.bounces > 1 && bounded(has_max, gi.radial_probes_later) != kinds[0] {
+            kinds.push(!kinds[0]);
+        }
+        let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
             for (name, size) in buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len()) {
                 bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
             }
@@ -208,18 +224,33 @@ impl IndirectPass {
             )?);
             let push = scan_push(scene, (ww, wh), sets[0].1, rad);
             let layout = pyramid.layout();
-            if uses_max_bound(scene) {
+            if has_max {
                 max = Some(MaxPyramid::new(ctx, pyramid)?);
             }
             memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
-            let scan = ComputePipeline::new(
-                ctx,
-                &shaders::INDIRECT_SCAN_COMP,
-                &[DescriptorKind::StorageBuffer; 12],
-                std::mem::size_of::<IndirectPush>() as u32,
-                &[
+            let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
+            let [light, triple, albedo, consts, output] = shade.bindings();
+            let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
+            let binds = [
+                Bind::Buffer(pyramid.levels_buffer()),
+                Bind::Buffer(pyramid.table_buffer()),
+                Bind::Buffer(hstack),
+                Bind::Buffer(rad.pyramid.levels_buffer()),
+                Bind::Buffer(rad.pyramid.table_buffer()),
+                Bind::Buffer(rstack),
+                Bind::Buffer(&bufs[0]),
+                Bind::Buffer(&bufs[1]),
+                Bind::Buffer(&bufs[2]),
+                Bind::Buffer(&bufs[U]),
+                Bind::Buffer(consts),
+                // Without the bound the scan never reads binding 11: any buffer.
+                Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
+            ];
+            let mut scan_sets = Vec::new();
+            for &bound in &kinds {
+                let spec = [
                     &[
                         (0, n as u32),
                         (1, layout.count() as u32),
@@ -227,34 +258,16 @@ impl IndirectPass {
                         (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
                         (7, push.radiance_stack),
                         (8, gi.storage.spec()),
+                        (9, bound as u32),
                     ][..],
                     &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags),
                 ]
-                .concat(),
-                1,
-            )?;
-            let scan = pipes.push_get(scan);
-            let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
-            let [light, triple, albedo, consts, output] = shade.bindings();
-            let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
-            let scan_set = scan.allocate_set(
-                ctx,
-                &[
-                    Bind::Buffer(pyramid.levels_buffer()),
-                    Bind::Buffer(pyramid.table_buffer()),
-                    Bind::Buffer(hstack),
-                    Bind::Buffer(rad.pyramid.levels_buffer()),
-                    Bind::Buffer(rad.pyramid.table_buffer()),
-                    Bind::Buffer(rstack),
-                    Bind::Buffer(&bufs[0]),
-                    Bind::Buffer(&bufs[1]),
-                    Bind::Buffer(&bufs[2]),
-                    Bind::Buffer(&bufs[U]),
-                    Bind::Buffer(consts),
-                    // Without the bound the scan never reads binding 11: any buffer.
-                    Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
-                ],
-            )?;
+                .concat();
+                let size = std::mem::size_of::<IndirectPush>() as u32;
+                let kinds12 = [DescriptorKind::StorageBuffer; 12];
+                let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds12, size, &spec, 1)?;
+                scan_sets.push(pipes.push_get(scan).allocate_set(ctx, &binds)?);
+            }
             let sh = ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
@@ -286,9 +299,9 @@ impl IndirectPass {
                     Bind::Buffer(output),                     // the spheres: unread by the bounces
                 ],
             )?;
-            Ok((scan_set, shade_set, push))
+            Ok((scan_sets, shade_set, push))
         })();
-        let (scan_set, shade_set, push) = match made {
+        let (scan_sets, shade_set, push) = match made {
             Ok(s) => s,
             Err(e) => {
                 bufs.into_iter().for_each(|b| b.destroy(ctx));
@@ -303,13 +316,12 @@ impl IndirectPass {
             }
         };
         let shade_pipe = pipes.pop().expect("shade");
-        let scan_pipe = pipes.pop().expect("scan");
+        let scans = kinds.into_iter().zip(pipes).zip(scan_sets).map(|((b, p), set)| (b, p, set)).collect();
         let e = elevation::gpu_size(gi.elevation_basis, n);
         Ok(Self {
             radiance: radiance.expect("radiance"),
             max,
-            scan: scan_pipe,
-            scan_set,
+            scans,
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
@@ -358,20 +370,22 @@ impl IndirectPass {
     /// `indirect.scan`).
     pub fn record_scan(&self, rec: &mut Recorder, bounce: u32) {
         let probes = if bounce > 1 { self.probes_later } else { self.push.probes };
-        // The bound pays where it saves probes; without probes it costs more than it saves
-        // (docs/accuracy.md §4).
-        let bound = if self.max.is_some() && probes > 0 { FLAG_MAX_BOUND } else { 0 };
+        let bound = bounded(self.max.is_some(), probes);
+        // The pipeline of this kind; the first otherwise (never, as created): an unbounded
+        // pipeline ignores the flag and a bounded one without it scans unbounded, both exactly.
+        let (_, scan, set) = self.scans.iter().find(|s| s.0 == bound).unwrap_or(&self.scans[0]);
         rec.scope(STAGE_SCAN, |ctx, cmd| {
             let g = [
                 groups(self.push.work_width, crate::constants::WORKGROUP),
                 groups(self.push.work_height, crate::constants::WORKGROUP),
                 1,
             ];
+            let bound = if bound { FLAG_MAX_BOUND } else { 0 };
             // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into U.
             for (i, (first, count)) in self.chunks[(bounce > 1) as usize].iter().enumerate() {
                 let flags = self.push.flags | bound | if i > 0 { FLAG_ACCUMULATE } else { 0 };
                 let push = IndirectPush { sample_offset: *first, sample_count: *count, flags, probes, ..self.push };
-                self.scan.dispatch(ctx, cmd, self.scan_set, bytemuck::bytes_of(&push), g);
+                scan.dispatch(ctx, cmd, *set, bytemuck::bytes_of(&push), g);
                 barrier::compute_to_compute(ctx, cmd);
             }
         });
@@ -428,7 +442,7 @@ impl IndirectPass {
     }
 
     pub fn destroy(mut self, ctx: &Context) {
-        self.scan.destroy(ctx);
+        self.scans.drain(..).for_each(|(_, mut p, _)| p.destroy(ctx));
         self.shade.destroy(ctx);
         self.buffers.drain(..).for_each(|b| b.destroy(ctx));
         self.radiance.destroy(ctx);
