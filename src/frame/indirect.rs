@@ -166,6 +166,62 @@ fn bounded(has_max: bool, probes: u32) -> bool {
     has_max && probes > 0
 }
 
+/// The scan pipelines a scene gets, by [`bounded`]: the first bounce's kind and, when later
+/// bounces differ, theirs (a bounce past `gi.bounces` takes the first, which scans it exactly).
+fn scan_kinds(scene: &Scene, has_max: bool) -> Vec<bool> {
+    let gi = &scene.gi;
+    let first = bounded(has_max, gi.radial_probes);
+    let later = gi.bounces > 1 && bounded(has_max, gi.radial_probes_later) != first;
+    if later {
+        vec![first, !first]
+    } else {
+        vec![first]
+    }
+}
+
+/// The scan's specialization constants (`glsl/indirect/scan.comp.glsl`) for `n_v` height levels
+/// and the creation push `push`: the bound's code compiled in or out with `bound`.
+fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, bound: bool) -> Vec<(u32, u32)> {
+    let gi = &scene.gi;
+    let n = gi.sh_order;
+    let own = [
+        (0, n as u32),
+        (1, n_v as u32),
+        (2, vector_pyramid(scene) as u32),
+        (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
+        (7, push.radiance_stack),
+        (8, gi.storage.spec()),
+        (9, bound as u32),
+    ];
+    [&own[..], &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
+}
+
+/// The shading shader in indirect mode (`indirect.shade`).
+fn shade_pipeline(ctx: &Context, scene: &Scene) -> Result<ComputePipeline> {
+    let gi = &scene.gi;
+    let spec = [
+        (0, gi.sh_order as u32),
+        (1, 1),
+        (2, vector_pyramid(scene) as u32),
+        (3, super::blockers::shading_mode(scene)),
+        (4, gi.storage.spec()),
+    ];
+    let size = std::mem::size_of::<ShadePush>() as u32;
+    ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &[DescriptorKind::StorageBuffer; 11], size, &spec, 1)
+}
+
+/// Azimuth chunks `(first, count)` of the first bounce's scan and of the later ones' over their
+/// sample sets ([`ScanData::sets`]), against lavapipe's loop limit.
+fn scan_chunks(gi: &crate::scene::model::GiSettings, ladder: usize, sets: [(u32, u32); 2]) -> [Vec<(u32, u32)>; 2] {
+    let (n, e) = (gi.sh_order, elevation::gpu_size(gi.elevation_basis, gi.sh_order));
+    [(gi.radial_probes, sets[0]), (gi.radial_probes_later, sets[1])].map(|(p, (first, count))| {
+        // A member adds an outer iteration of the scan's while-while loop and an e-vector.
+        let cost = ladder * (1 + p as usize) * (e + 1) + n * n * e;
+        let chunks = azimuth_chunks(count, cost as u32, INDIRECT_LOOP_BUDGET);
+        chunks.into_iter().map(|(f, c)| (first + f, c)).collect()
+    })
+}
+
 const U: usize = 3;
 const BOUNCE: usize = 4;
 const INCIDENT: usize = 5;
@@ -195,13 +251,8 @@ impl IndirectPass {
         let mut pipes: Vec<ComputePipeline> = Vec::new();
         let mut radiance = None;
         let mut max = None;
-        // The scan pipelines: bounded and/or unbounded, as the scene's bounces' probes ask
-        // (record_scan; a bounce past gi.bounces takes the first, which scans it exactly).
         let has_max = uses_max_bound(scene);
-        let mut kinds = vec![bounded(has_max, gi.radial_probes)];
-        if gi.bounces > 1 && bounded(has_max, gi.radial_probes_later) != kinds[0] {
-            kinds.push(!kinds[0]);
-        }
+        let kinds = scan_kinds(scene, has_max);
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
             for (name, size) in buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len()) {
                 bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
@@ -250,39 +301,13 @@ impl IndirectPass {
             ];
             let mut scan_sets = Vec::new();
             for &bound in &kinds {
-                let spec = [
-                    &[
-                        (0, n as u32),
-                        (1, layout.count() as u32),
-                        (2, vector as u32),
-                        (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
-                        (7, push.radiance_stack),
-                        (8, gi.storage.spec()),
-                        (9, bound as u32),
-                    ][..],
-                    &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags),
-                ]
-                .concat();
+                let spec = scan_spec(scene, layout.count(), &push, bound);
                 let size = std::mem::size_of::<IndirectPush>() as u32;
                 let kinds12 = [DescriptorKind::StorageBuffer; 12];
                 let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds12, size, &spec, 1)?;
                 scan_sets.push(pipes.push_get(scan).allocate_set(ctx, &binds)?);
             }
-            let sh = ComputePipeline::new(
-                ctx,
-                &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 11],
-                std::mem::size_of::<ShadePush>() as u32,
-                &[
-                    (0, n as u32),
-                    (1, 1),
-                    (2, vector as u32),
-                    (3, super::blockers::shading_mode(scene)),
-                    (4, gi.storage.spec()),
-                ],
-                1,
-            )?;
-            let sh = pipes.push_get(sh);
+            let sh = pipes.push_get(shade_pipeline(ctx, scene)?);
             let shade_set = sh.allocate_set(
                 ctx,
                 &[
@@ -317,7 +342,6 @@ impl IndirectPass {
         };
         let shade_pipe = pipes.pop().expect("shade");
         let scans = kinds.into_iter().zip(pipes).zip(scan_sets).map(|((b, p), set)| (b, p, set)).collect();
-        let e = elevation::gpu_size(gi.elevation_basis, n);
         Ok(Self {
             radiance: radiance.expect("radiance"),
             max,
@@ -325,12 +349,7 @@ impl IndirectPass {
             shade: shade_pipe,
             shade_set,
             buffers: bufs,
-            chunks: [(gi.radial_probes, sets[0]), (gi.radial_probes_later, sets[1])].map(|(p, (first, count))| {
-                // A member adds an outer iteration of the scan's while-while loop and an e-vector.
-                let cost = ladder.len() * (1 + p as usize) * (e + 1) + n * n * e;
-                let chunks = azimuth_chunks(count, cost as u32, INDIRECT_LOOP_BUDGET);
-                chunks.into_iter().map(|(f, c)| (first + f, c)).collect()
-            }),
+            chunks: scan_chunks(gi, ladder.len(), sets),
             push,
             probes_later: gi.radial_probes_later,
             shade_push: shade.push(),
