@@ -461,15 +461,20 @@ fn settings_label(g: &GiSettings) -> String {
     } else {
         String::new()
     };
-    // The later bounces' azimuths when they differ from m: `m=32/16`.
-    let m = match g.scan_azimuths(2) {
-        later if g.bounces > 1 && later != g.azimuths => format!("{}/{later}", g.azimuths),
-        _ => g.azimuths.to_string(),
-    };
+    let m = azimuths_label(g);
     format!(
         "n={} m={m} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}{blockers}",
         g.sh_order, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
     )
+}
+
+/// `m`, or `m/m_later` when the later bounces scan with fewer azimuths (`gi.azimuths_later`):
+/// the bench's labels and `hfgi render`'s settings line.
+pub(crate) fn azimuths_label(g: &GiSettings) -> String {
+    match g.scan_azimuths(2) {
+        later if g.bounces > 1 && later != g.azimuths => format!("{}/{later}", g.azimuths),
+        _ => g.azimuths.to_string(),
+    }
 }
 
 /// Most timed frames per configuration (the median of a few is what the bench reports).

@@ -263,17 +263,11 @@ fn render(a: RenderArgs) -> Result<()> {
     hfgi::frame::memory::check_device(&scene, ctx.info()).context("checking the scene against the device")?;
     let gi = &scene.gi;
     eprintln!(
-        "device: {} ({}); field {w}×{h}; n={} m={}{} k_v={} o_v={} subsample={} {} {}",
+        "device: {} ({}); field {w}×{h}; n={} m={} k_v={} o_v={} subsample={} {} {}",
         ctx.info().name,
         ctx.info().driver,
         gi.sh_order,
-        gi.azimuths,
-        // The later bounces' azimuths when they differ (gi.azimuths_later).
-        if gi.bounces > 1 && gi.scan_azimuths(2) != gi.azimuths {
-            format!("/{}", gi.scan_azimuths(2))
-        } else {
-            String::new()
-        },
+        bench::azimuths_label(gi),
         gi.level_step,
         gi.level_offset,
         gi.subsample,
