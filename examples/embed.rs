@@ -248,7 +248,7 @@ fn frames(
 ) -> Result<(u64, u64, Result<(), String>), String> {
     let (submits, pipelines) = (ctx.submit_count(), ctx.pipelines_created());
     let bytes = (SIZE * SIZE * 4) as u64;
-    let shading = (SIZE * SIZE * 16) as u64;
+    let shading = (SIZE * SIZE * 12) as u64; // plane 0 (the total): RGB f32 per texel
     let pool_info = vk::CommandPoolCreateInfo::default()
         .queue_family_index(h.family)
         .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);

@@ -9,17 +9,20 @@ pub const WORKGROUP: u32 = 8;
 /// Size of the 1D compute workgroups (the line sweep, the pyramid probe).
 pub const WORKGROUP_1D: u32 = 64;
 
-/// Planes of the shading buffer (`vec4` per texel, each `W × H`): the exported layers
-/// (CONVENTIONS.md) total, direct, indirect, glossy, then the glossy light of the direct light
-/// and of the bounces (their sum is the glossy layer).
+/// Planes of the shading buffer (RGB `f32` triples per texel, each `W × H`): the exported
+/// layers (CONVENTIONS.md) total, direct, indirect, glossy, then the glossy light of the direct
+/// light and of the bounces (their sum is the glossy layer). A surface without specular has
+/// only the first [`PLANES_DIFFUSE`].
 pub const PLANE_TOTAL: u32 = 0;
 pub const PLANE_DIRECT: u32 = 1;
 pub const PLANE_INDIRECT: u32 = 2;
 pub const PLANE_GLOSSY: u32 = 3;
 pub const PLANE_GLOSSY_DIRECT: u32 = 4;
 pub const PLANE_GLOSSY_INDIRECT: u32 = 5;
-/// Planes in the shading buffer.
+/// Planes in the shading buffer of a glossy surface (`material.specular` set).
 pub const PLANES: u32 = 6;
+/// Planes in the shading buffer of a diffuse surface: total, direct, indirect.
+pub const PLANES_DIFFUSE: u32 = 3;
 
 /// Entries per order of the optimal-linear SH exponentiation's `a`, `b` tables
 /// (`math::shexp::OL_POINTS`, checked equal there).
@@ -48,6 +51,7 @@ pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
     ("PLANE_GLOSSY_DIRECT", PLANE_GLOSSY_DIRECT, true),
     ("PLANE_GLOSSY_INDIRECT", PLANE_GLOSSY_INDIRECT, true),
     ("PLANES", PLANES, true),
+    ("PLANES_DIFFUSE", PLANES_DIFFUSE, true),
     ("OL_POINTS", OL_POINTS, false),
     ("MATCHED_INTERVALS", MATCHED_INTERVALS, false),
     ("LOCAL_GLOSSY_NODES", LOCAL_GLOSSY_NODES, true),

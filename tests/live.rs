@@ -174,6 +174,10 @@ fn changes_the_renderer_was_not_built_for_are_typed_errors() {
     let map = Albedo::Map(vec![[0.5; 3]; 24 * 24]);
     let e = r.set_material(&hfgi::scene::model::Material { albedo: map, ..s.material.clone() }).unwrap_err();
     assert!(e.to_string().contains("albedo"), "{e}");
+    let mut matte = s.material.clone();
+    matte.specular = None;
+    let e = r.set_material(&matte).unwrap_err().to_string();
+    assert!(e.contains("no longer has a specular colour") && e.contains("glossy planes"), "{e}");
     // Nothing was applied: the next frame records nothing beyond the first frame.
     assert_eq!(record_frame(&ctx, &mut r).first().map(String::as_str), Some("pyramid.decimate"));
     assert!(record_frame(&ctx, &mut r).is_empty());
@@ -188,46 +192,54 @@ fn changes_the_renderer_was_not_built_for_are_typed_errors() {
     r.destroy(&ctx);
 }
 
+/// For a glossy surface (6 shading planes) and a diffuse one (3: its glossy layers read as
+/// zero both ways).
 #[test]
 fn creation_submits_once_and_recorded_transfers_equal_the_blocking_helpers() {
     use hfgi::vk::{Recorder, RingKind, StagingRing};
     let ctx = gpu();
-    let s = base();
-    let before = ctx.submit_count();
-    let mut blocking = Renderer::new(&ctx, &s).unwrap();
-    assert_eq!(ctx.submit_count() - before, 1, "creating a renderer submits once");
-    let mut recorded = Renderer::new(&ctx, &s).unwrap();
-    record_frame(&ctx, &mut blocking);
-    record_frame(&ctx, &mut recorded);
-    let next = rough_field(24, 24, 9);
-    blocking.update_heights(&ctx, &next).unwrap();
-    record_frame(&ctx, &mut blocking);
-    let want = layers(&ctx, &blocking);
-    let mut up = StagingRing::new(&ctx, "test.upload", 24 * 24 * 4, RingKind::Upload).unwrap();
-    let mut down = StagingRing::new(&ctx, "test.readback", 5 * 24 * 24 * 16, RingKind::Readback).unwrap();
-    let submits = ctx.submit_count();
-    let (stages, token) = ctx
-        .submit_and_wait(|cmd| {
-            let mut rec = Recorder::new(&ctx, cmd, None);
-            recorded.record_heights_upload(&mut rec, &mut up, &next)?;
-            recorded.record(&mut rec);
-            let token = recorded.record_read_layers(&mut rec, &mut down)?;
-            Ok((rec.stages().to_vec(), token))
-        })
-        .unwrap();
-    assert_eq!(ctx.submit_count() - submits, 1, "only the test's own submit");
-    assert_eq!(stages.first().map(String::as_str), Some("heights.upload"));
-    assert_eq!(stages.last().map(String::as_str), Some("shade.readback"));
-    let got = token.layers(&mut down).unwrap();
-    assert_eq!(rel_diff(&got, &want), 0.0, "recorded upload + read-back differ from the blocking helpers");
-    // A full ring is a typed error, not an overwrite.
-    let e =
-        recorded.record_read_layers(&mut Recorder::new(&ctx, hfgi::ash::vk::CommandBuffer::null(), None), &mut down);
-    assert!(e.unwrap_err().to_string().contains("reset() the ring"));
-    up.reset();
-    down.reset();
-    up.destroy(&ctx);
-    down.destroy(&ctx);
-    blocking.destroy(&ctx);
-    recorded.destroy(&ctx);
+    let mut matte = base();
+    matte.material.specular = None;
+    for s in [base(), matte] {
+        let before = ctx.submit_count();
+        let mut blocking = Renderer::new(&ctx, &s).unwrap();
+        assert_eq!(ctx.submit_count() - before, 1, "creating a renderer submits once");
+        let mut recorded = Renderer::new(&ctx, &s).unwrap();
+        record_frame(&ctx, &mut blocking);
+        record_frame(&ctx, &mut recorded);
+        let next = rough_field(24, 24, 9);
+        blocking.update_heights(&ctx, &next).unwrap();
+        record_frame(&ctx, &mut blocking);
+        let want = layers(&ctx, &blocking);
+        let mut up = StagingRing::new(&ctx, "test.upload", 24 * 24 * 4, RingKind::Upload).unwrap();
+        // Five layers of RGB f32 (the most record_read_layers copies).
+        let mut down = StagingRing::new(&ctx, "test.readback", 5 * 24 * 24 * 12, RingKind::Readback).unwrap();
+        let submits = ctx.submit_count();
+        let (stages, token) = ctx
+            .submit_and_wait(|cmd| {
+                let mut rec = Recorder::new(&ctx, cmd, None);
+                recorded.record_heights_upload(&mut rec, &mut up, &next)?;
+                recorded.record(&mut rec);
+                let token = recorded.record_read_layers(&mut rec, &mut down)?;
+                Ok((rec.stages().to_vec(), token))
+            })
+            .unwrap();
+        assert_eq!(ctx.submit_count() - submits, 1, "only the test's own submit");
+        assert_eq!(stages.first().map(String::as_str), Some("heights.upload"));
+        assert_eq!(stages.last().map(String::as_str), Some("shade.readback"));
+        let got = token.layers(&mut down).unwrap();
+        assert_eq!(rel_diff(&got, &want), 0.0, "recorded upload + read-back differ from the blocking helpers");
+        let glossy = got.glossy.iter().chain(&got.indirect_glossy).flatten().fold(0f32, |m, v| m.max(v.abs()));
+        assert_eq!(glossy == 0.0, s.material.specular.is_none(), "glossy layers: max {glossy}");
+        // A full ring is a typed error, not an overwrite.
+        let null = hfgi::ash::vk::CommandBuffer::null();
+        let e = recorded.record_read_layers(&mut Recorder::new(&ctx, null, None), &mut down);
+        assert!(e.unwrap_err().to_string().contains("reset() the ring"));
+        up.reset();
+        down.reset();
+        up.destroy(&ctx);
+        down.destroy(&ctx);
+        blocking.destroy(&ctx);
+        recorded.destroy(&ctx);
+    }
 }

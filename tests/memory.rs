@@ -214,6 +214,26 @@ fn f16_storage_halves_v_u_and_the_radiance_stack() {
     }
 }
 
+/// The shading buffer holds RGB `f32` triples (12 bytes per texel), six planes for a glossy
+/// surface and three (total, direct, indirect) for a diffuse one, and the renderer reports the
+/// same plane count; first principles, not the estimate's own formula.
+#[test]
+fn shading_planes_are_rgb_and_only_a_glossy_surface_has_the_glossy_ones() {
+    let ctx = common::gpu();
+    for (specular, planes) in [(None, 3u64), (Some("material.specular=[0.2,0.2,0.2]"), 6)] {
+        let mut o = vec!["heightfield.size=[37,50]", "gi.bounces=1"];
+        o.extend(specular);
+        let scene = scene_of("", &o);
+        let e = memory::renderer(&scene).unwrap();
+        let bytes = e.buffers.iter().find(|(b, _)| b == "hfgi.shade.output").unwrap().1;
+        assert_eq!(bytes, planes * 37 * 50 * 12, "specular {specular:?}");
+        let r = Renderer::new(&ctx, &scene).unwrap();
+        assert_eq!(r.shading_planes() as u64, planes);
+        assert_eq!(r.shading_buffer().size, planes * 37 * 50 * 12);
+        r.destroy(&ctx);
+    }
+}
+
 #[test]
 fn estimate_follows_the_forced_sample_count() {
     let scene = scene_of("", &["heightfield.size=[37,50]", "camera.width=97", "camera.height=61"]);

@@ -37,10 +37,10 @@ impl Inputs {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let hb = Buffer::new(ctx, "test.heights", (w * h * 4) as u64, usage, MemoryLocation::GpuOnly).unwrap();
         memory::upload_f32(ctx, &hb, 0, &heights).unwrap();
-        // Plane 0 (total) followed by a garbage plane that must not be read.
-        let mut planes: Vec<[f32; 4]> = colours.iter().map(|c| [c[0], c[1], c[2], 1.0]).collect();
-        planes.extend(std::iter::repeat([-7.0f32, -7.0, -7.0, 1.0]).take(w * h));
-        let sb = Buffer::new(ctx, "test.shading", (planes.len() * 16) as u64, usage, MemoryLocation::GpuOnly).unwrap();
+        // Plane 0 (total, RGB f32 per texel) followed by a garbage plane that must not be read.
+        let mut planes: Vec<[f32; 3]> = colours.clone();
+        planes.extend(std::iter::repeat([-7.0f32, -7.0, -7.0]).take(w * h));
+        let sb = Buffer::new(ctx, "test.shading", (planes.len() * 12) as u64, usage, MemoryLocation::GpuOnly).unwrap();
         memory::upload(ctx, &sb, 0, bytemuck::cast_slice(&planes)).unwrap();
         Self { w, h, heights, colours, hb, sb }
     }

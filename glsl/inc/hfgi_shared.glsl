@@ -150,8 +150,8 @@ struct hfgi_GatherPush {
     uint channel_stride; // floats per channel in the radiance levels buffer
     uint vector;         // 1: channels 0-2 diffuse only, then 3 n² incident SH channels
     uint n2;
+    uint glossy;         // 1: the shading buffer has the glossy planes (direct glossy: plane 4)
     uint pad0;
-    uint pad1;
 };
 
 // Push constants of the view raster pass (glsl/view/raster.vert.glsl). 112 bytes.

@@ -7,10 +7,10 @@
 // With HFGI_INDIRECT = 1 the same shader shades one indirect bounce (docs/indirect.md §4): the
 // incident radiance is the IR vector U of eq. 21 (RGB, from binding 1) instead of L ⊛ V.
 //
-// Output planes (vec4, W×H each): 0 total, 1 direct, 2 indirect (Σ bounces), 3 glossy,
-// 4 glossy of the direct light, 5 glossy of the indirect light. Each dispatch rewrites its own
-// planes and recomposes 0 and 3 from 1, 2, 4, 5, so direct and indirect may be updated on
-// different frames (amortised shading, §7).
+// Output planes (RGB f32 triples, W×H each): 0 total, 1 direct, 2 indirect (Σ bounces), and
+// for a glossy surface (HFGI_GLOSSY) 3 glossy, 4 glossy of the direct light, 5 glossy of the
+// indirect light. Each dispatch rewrites its own planes and recomposes 0 and 3 from 1, 2, 4, 5,
+// so direct and indirect may be updated on different frames (amortised shading, §7).
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;
@@ -24,6 +24,7 @@ layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (
 // and its glossy light ⟨L_env, T_φ⟩ with T_φ = exp*(f_hf + Σ f_i + f_φ(R)) (the fourth vector).
 layout(constant_id = 3) const uint HFGI_BLOCKERS = 0u;
 layout(constant_id = 4) const uint HFGI_HALF = 0u; // gi.storage of binding 1: 1 = f16 (hfgi_store.glsl)
+layout(constant_id = 5) const int HFGI_GLOSSY = 0; // 1: the buffer has the glossy planes 3-5 (shade::planes)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
@@ -37,7 +38,7 @@ layout(std430, binding = 5) readonly buffer Consts {
     float hfgi_zh_glossy[HFGI_MAX_SH_ORDER];  // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
-layout(std430, binding = 6) buffer Out { vec4 hfgi_out[]; };                  // HFGI_PLANES planes × W×H
+layout(std430, binding = 6) buffer Out { float hfgi_out[]; };                 // 6 (3 without HFGI_GLOSSY) planes × W×H × rgb
 layout(std430, binding = 7) writeonly buffer Bounce { float hfgi_bounce[]; }; // indirect: the next bounce's radiance, rgb per texel
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
 layout(std430, binding = 9) readonly buffer Blockers { float hfgi_bv[]; };     // receivers × n² (× 2 in log mode)
@@ -46,6 +47,15 @@ layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
 #include "hfgi_store.glsl"
+
+// Texel `at` (plane · W·H + texel) of the shading planes.
+vec3 hfgi_out_get(uint at) {
+    return vec3(hfgi_out[3u * at], hfgi_out[3u * at + 1u], hfgi_out[3u * at + 2u]);
+}
+
+void hfgi_out_set(uint at, vec3 v) {
+    for (uint c = 0u; c < 3u; ++c) hfgi_out[3u * at + c] = v[c];
+}
 
 float height(int x, int y) {
     return hfgi_levels[uint(y) * pc.width + uint(x)];
@@ -264,16 +274,19 @@ void main() {
         vec3 next = HFGI_STORE_T != 0 ? direct : direct + glossy;
         for (uint c = 0u; c < 3u; ++c) hfgi_bounce[3u * idx + c] = next[c];
         if (pc.accumulate != 0u) {
-            direct += hfgi_out[at_indirect].rgb;
-            glossy += hfgi_out[at_gi].rgb;
+            direct += hfgi_out_get(at_indirect);
+            if (HFGI_GLOSSY != 0) glossy += hfgi_out_get(at_gi);
         }
-        hfgi_out[at_indirect] = vec4(direct, 1.0);
-        hfgi_out[at_gi] = vec4(glossy, 1.0);
+        hfgi_out_set(at_indirect, direct);
+        if (HFGI_GLOSSY != 0) hfgi_out_set(at_gi, glossy);
     } else {
-        hfgi_out[at_direct] = vec4(direct, 1.0);
-        hfgi_out[at_gd] = vec4(glossy, 1.0);
+        hfgi_out_set(at_direct, direct);
+        if (HFGI_GLOSSY != 0) hfgi_out_set(at_gd, glossy);
     }
-    vec3 g = hfgi_out[at_gd].rgb + hfgi_out[at_gi].rgb;
-    hfgi_out[HFGI_PLANE_GLOSSY * plane + idx] = vec4(g, 1.0);
-    hfgi_out[HFGI_PLANE_TOTAL * plane + idx] = vec4(hfgi_out[at_direct].rgb + hfgi_out[at_indirect].rgb + g, 1.0);
+    vec3 g = vec3(0.0);
+    if (HFGI_GLOSSY != 0) {
+        g = hfgi_out_get(at_gd) + hfgi_out_get(at_gi);
+        hfgi_out_set(HFGI_PLANE_GLOSSY * plane + idx, g);
+    }
+    hfgi_out_set(HFGI_PLANE_TOTAL * plane + idx, hfgi_out_get(at_direct) + hfgi_out_get(at_indirect) + g);
 }

@@ -15,11 +15,12 @@
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 
+layout(constant_id = 0) const int HFGI_GLOSSY = 0; // 1: the shading buffer has the glossy planes (shade::planes)
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };  // level 0 = absolute heights, W×H
 layout(std430, binding = 1) readonly buffer Lights { vec4 hfgi_lights[]; };  // per slot: (c_hi, r), (c_lo, 0), (L, 0)
 layout(std430, binding = 2) readonly buffer Nodes { vec2 hfgi_nodes[]; };    // Gauss–Legendre (x, w) on [−1, 1]
 layout(std430, binding = 3) readonly buffer Albedo { vec4 hfgi_albedo[]; };  // per texel (albedo_map)
-layout(std430, binding = 4) buffer Out { vec4 hfgi_out[]; };                 // the shading planes
+layout(std430, binding = 4) buffer Out { float hfgi_out[]; };                // the shading planes (rgb per texel)
 layout(push_constant) uniform Push { hfgi_LocalPush pc; };
 #define HFGI_FIELD_H(i) hfgi_levels[i]
 #define HFGI_FIELD_W pc.width
@@ -113,6 +114,11 @@ vec2 light_irradiance(vec2 p, float base, vec3 N, vec3 R, vec3 C, float r) {
     return vec2(E, G);
 }
 
+// Adds `v` to texel `at` (plane · W·H + texel) of the shading planes.
+void hfgi_out_add(uint at, vec3 v) {
+    for (uint c = 0u; c < 3u; ++c) hfgi_out[3u * at + c] += v[c];
+}
+
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (p.x >= int(pc.width) || p.y >= int(pc.height)) return;
@@ -137,14 +143,15 @@ void main() {
     vec3 add = rho * E * 0.31830988618379067;
     uint plane = pc.width * pc.height, idx = uint(p.y) * pc.width + uint(p.x);
     uint at_direct = HFGI_PLANE_DIRECT * plane + idx, at_total = HFGI_PLANE_TOTAL * plane + idx;
-    hfgi_out[at_direct] = vec4(hfgi_out[at_direct].rgb + add, 1.0);
+    hfgi_out_add(at_direct, add);
     vec3 gl = pc.glossy != 0u ? pc.specular.rgb * G : vec3(0.0);
-    if (pc.glossy != 0u) {
+    if (HFGI_GLOSSY != 0 && pc.glossy != 0u) {
         // The glossy light joins the direct glossy plane and the glossy layer (shade.direct
-        // recomposes them from planes 4 and 5, so later bounces keep it).
-        uint at_gd = HFGI_PLANE_GLOSSY_DIRECT * plane + idx, at_g = HFGI_PLANE_GLOSSY * plane + idx;
-        hfgi_out[at_gd] = vec4(hfgi_out[at_gd].rgb + gl, 1.0);
-        hfgi_out[at_g] = vec4(hfgi_out[at_g].rgb + gl, 1.0);
+        // recomposes them from planes 4 and 5, so later bounces keep it). Only a surface
+        // created glossy has these planes (HFGI_GLOSSY, shade::planes).
+        hfgi_out_add(HFGI_PLANE_GLOSSY_DIRECT * plane + idx, gl);
+        hfgi_out_add(HFGI_PLANE_GLOSSY * plane + idx, gl);
     }
-    hfgi_out[at_total] = vec4(hfgi_out[at_total].rgb + add + gl, 1.0);
+    hfgi_out_add(at_total, add);
+    hfgi_out_add(at_total, gl);
 }

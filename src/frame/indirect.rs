@@ -198,14 +198,7 @@ fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, bound: bool) -> Vec
 
 /// The shading shader in indirect mode (`indirect.shade`).
 fn shade_pipeline(ctx: &Context, scene: &Scene) -> Result<ComputePipeline> {
-    let gi = &scene.gi;
-    let spec = [
-        (0, gi.sh_order as u32),
-        (1, 1),
-        (2, vector_pyramid(scene) as u32),
-        (3, super::blockers::shading_mode(scene)),
-        (4, gi.storage.spec()),
-    ];
+    let spec = super::shade::spec(scene, true);
     let size = std::mem::size_of::<ShadePush>() as u32;
     ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &[DescriptorKind::StorageBuffer; 11], size, &spec, 1)
 }
@@ -271,6 +264,7 @@ impl IndirectPass {
                     bounce: &bufs[BOUNCE],
                     incident_direct: shade.incident(),
                     incident_bounce: &bufs[INCIDENT],
+                    glossy_planes: super::shade::glossy_planes(scene),
                 },
             )?);
             let push = scan_push(scene, (ww, wh), sets[0].1, rad);

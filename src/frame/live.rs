@@ -300,8 +300,10 @@ impl Renderer {
     }
 
     /// Sets the material: a constant albedo, the Phong specular colour and exponent. Fixed at
-    /// creation: an albedo map (pass it unchanged), and whether the surface reflects light and
-    /// uses the glossy vector pyramid (the passes created for it).
+    /// creation: an albedo map (pass it unchanged), whether the surface has a specular colour
+    /// (the shading buffer's glossy planes: create it with `specular = Some([0.0; 3])` to turn
+    /// the gloss on later), and whether it reflects light and uses the glossy vector pyramid
+    /// (the passes created for it).
     pub fn set_material(&mut self, material: &Material) -> Result<()> {
         material.check()?;
         let old = &self.live.scene;
@@ -320,6 +322,11 @@ impl Renderer {
         next.material = material.clone();
         for (what, before, after) in [
             ("reflects light (the indirect pass)", needs_indirect(old), needs_indirect(&next)),
+            (
+                "has a specular colour (the shading buffer's glossy planes)",
+                shade::glossy_planes(old),
+                shade::glossy_planes(&next),
+            ),
             ("uses the glossy vector pyramid", vector_pyramid(old), vector_pyramid(&next)),
         ] {
             if before != after {

@@ -112,7 +112,7 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     }
     e.buffers(super::blockers::buffer_sizes(scene));
     e.buffers(shade::upload_sizes(scene));
-    e.buffer(shade::OUTPUT_BUFFER, shade::output_bytes(w, h));
+    e.buffer(shade::OUTPUT_BUFFER, shade::output_bytes(scene));
     e.buffer(shade::INCIDENT_BUFFER, shade::incident_bytes(scene));
     e.buffers(super::local::buffer_sizes(scene));
     if Planner::new(scene).creates_indirect() {

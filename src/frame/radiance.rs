@@ -54,6 +54,8 @@ pub struct RadianceInputs<'a> {
     /// pyramid only; any buffer otherwise).
     pub incident_direct: &'a Buffer,
     pub incident_bounce: &'a Buffer,
+    /// Whether the shading buffer has the glossy planes (`shade::planes`).
+    pub glossy_planes: bool,
 }
 
 pub struct RadiancePyramid {
@@ -102,7 +104,8 @@ impl RadiancePyramid {
                     channel_stride: pyramid.layout().total as u32,
                     vector: vector_n2.is_some() as u32,
                     n2: vector_n2.unwrap_or(0),
-                    pad: [0; 2],
+                    glossy: inputs.glossy_planes as u32,
+                    pad: 0,
                 };
                 Ok(Self { pyramid, gather, set, push })
             }

@@ -317,11 +317,19 @@ impl Renderer {
         self.heights_changed = true;
     }
 
-    /// The shading texture ([`ShadePass`] output): `vec4` per texel, planes `W × H` in the order
-    /// total, direct, indirect, glossy. After `record`, written by compute; a reader in another
-    /// stage adds its own barrier (see `docs/integration.md`).
+    /// The shading texture ([`ShadePass`] output): an RGB `f32` triple per texel (12 bytes,
+    /// tightly packed), planes `W × H` in the order total, direct, indirect, then for a glossy
+    /// surface glossy and two internal ones ([`Renderer::shading_planes`]: 6, or 3 for a
+    /// surface created without specular). After `record`, written by compute; a reader in
+    /// another stage adds its own barrier (see `docs/integration.md`).
     pub fn shading_buffer(&self) -> &Buffer {
         self.shade.output()
+    }
+
+    /// Planes in [`Renderer::shading_buffer`]: 6 for a surface created with a specular colour,
+    /// 3 (total, direct, indirect) otherwise.
+    pub fn shading_planes(&self) -> usize {
+        self.shade.planes()
     }
 
     pub fn stats(&self) -> RendererStats {
@@ -379,7 +387,7 @@ impl Renderer {
             out.push(("visibility.blockers".to_string(), b.read(ctx)?));
         }
         let planes = ["total", "direct", "indirect", "glossy", "glossy_direct", "glossy_indirect"];
-        for (p, name) in planes.iter().enumerate() {
+        for (p, name) in planes.iter().enumerate().take(self.shade.planes()) {
             out.push((format!("shade.{name}"), self.shade.read_plane(ctx, p)?));
         }
         if let Some(t) = self.shade.read_incident(ctx)? {

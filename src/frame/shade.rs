@@ -1,10 +1,11 @@
 //! Stage `shade.direct` (NS09 §7; docs/direct.md §5–6): direct diffuse and Phong shading at
 //! full resolution from the light sets' SH visibility.
 //!
-//! Output: [`ShadePass::output`], `vec4` per texel (rgb + 1), [`PLANES`] planes of `W × H`:
-//! [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`], [`LAYER_GLOSSY`] and the internal
-//! [`PLANE_GLOSSY_DIRECT`], [`PLANE_GLOSSY_INDIRECT`] (zero until an indirect bounce writes
-//! them). Each shading dispatch recomposes total and glossy, so direct and indirect may be
+//! Output: [`ShadePass::output`], an RGB `f32` triple per texel (12 bytes, tightly packed),
+//! [`planes`] planes of `W × H`: [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`] and, for
+//! a glossy surface only (`material.specular` set at creation), [`LAYER_GLOSSY`] and the
+//! internal [`PLANE_GLOSSY_DIRECT`], [`PLANE_GLOSSY_INDIRECT`] (zero until an indirect bounce
+//! writes them). Each shading dispatch recomposes total and glossy, so direct and indirect may be
 //! updated on different frames (docs/indirect.md §5). After `record`, a
 //! compute→compute barrier has been recorded; for vertex/fragment or transfer reads add the
 //! matching barrier.
@@ -39,8 +40,24 @@ pub const LAYER_GLOSSY: usize = constants::PLANE_GLOSSY as usize;
 /// (their sum is [`LAYER_GLOSSY`]).
 pub const PLANE_GLOSSY_DIRECT: usize = constants::PLANE_GLOSSY_DIRECT as usize;
 pub const PLANE_GLOSSY_INDIRECT: usize = constants::PLANE_GLOSSY_INDIRECT as usize;
-/// Planes in the shading buffer.
+/// Planes in the shading buffer of a glossy surface ([`planes`]).
 pub const PLANES: usize = constants::PLANES as usize;
+
+/// Whether the shading buffer has the glossy planes: the surface has a specular colour at
+/// creation (`Renderer::set_material` cannot add one later; docs/integration.md §1).
+pub fn glossy_planes(scene: &Scene) -> bool {
+    scene.material.specular.is_some()
+}
+
+/// Planes in `scene`'s shading buffer: [`PLANES`] for a glossy surface, the three exported
+/// diffuse layers (total, direct, indirect) otherwise.
+pub fn planes(scene: &Scene) -> usize {
+    if glossy_planes(scene) {
+        PLANES
+    } else {
+        constants::PLANES_DIFFUSE as usize
+    }
+}
 /// Layer names as exported (CONVENTIONS.md): the total is the default layer.
 pub const LAYER_NAMES: [&str; 4] = ["", "direct", "indirect", "glossy"];
 
@@ -181,6 +198,19 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
     ]
 }
 
+/// Specialization constants of `glsl/shade/direct.comp.glsl`, in its direct mode
+/// (`shade.direct`) or its indirect mode (`indirect.shade`).
+pub(crate) fn spec(scene: &Scene, indirect: bool) -> [(u32, u32); 6] {
+    [
+        (0, scene.gi.sh_order as u32),
+        (1, indirect as u32),
+        (2, super::renderer::vector_pyramid(scene) as u32),
+        (3, super::blockers::shading_mode(scene)),
+        (4, scene.gi.storage.spec()),
+        (5, glossy_planes(scene) as u32),
+    ]
+}
+
 /// Names of the shading buffer and of the incident-radiance buffer.
 pub(crate) const OUTPUT_BUFFER: &str = "hfgi.shade.output";
 pub(crate) const INCIDENT_BUFFER: &str = "hfgi.shade.incident";
@@ -190,9 +220,9 @@ pub(crate) fn upload_bytes(len: usize) -> u64 {
     len.max(16) as u64
 }
 
-/// Bytes of [`OUTPUT_BUFFER`]: [`PLANES`] planes of `w × h` `vec4`s.
-pub(crate) fn output_bytes(w: usize, h: usize) -> u64 {
-    (PLANES * w * h * 16) as u64
+/// Bytes of [`OUTPUT_BUFFER`]: [`planes`] planes of `W × H` RGB `f32` triples.
+pub(crate) fn output_bytes(scene: &Scene) -> u64 {
+    (planes(scene) * scene.field.width() * scene.field.height() * 12) as u64
 }
 
 /// Bytes of [`INCIDENT_BUFFER`]: `T` per texel (`n²` `vec4`s) for the glossy vector pyramid
@@ -214,6 +244,8 @@ pub struct ShadePass {
     output: Buffer,
     incident: Buffer,
     push: ShadePush,
+    /// [`planes`] of the scene at creation.
+    planes: usize,
 }
 
 impl ShadePass {
@@ -226,8 +258,6 @@ impl ShadePass {
         blockers: Option<&super::blockers::BlockerPass>,
         scene: &Scene,
     ) -> Result<Self> {
-        let n = scene.gi.sh_order;
-        let store_t = super::renderer::vector_pyramid(scene);
         let (w, h) = (scene.field.width(), scene.field.height());
         let data = ShadeData::new(scene);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
@@ -244,7 +274,7 @@ impl ShadePass {
                 }
                 bufs.push(b);
             }
-            let out = Buffer::new(ctx, OUTPUT_BUFFER, output_bytes(w, h), usage, MemoryLocation::GpuOnly)?;
+            let out = Buffer::new(ctx, OUTPUT_BUFFER, output_bytes(scene), usage, MemoryLocation::GpuOnly)?;
             // Planes not written by a frame (indirect with bounces = 0) must read as zero.
             let cleared = memory::zero(ctx, &out);
             bufs.push(out);
@@ -256,13 +286,7 @@ impl ShadePass {
                 &shaders::SHADE_DIRECT_COMP,
                 &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<ShadePush>() as u32,
-                &[
-                    (0, n as u32),
-                    (1, 0),
-                    (2, store_t as u32),
-                    (3, super::blockers::shading_mode(scene)),
-                    (4, scene.gi.storage.spec()),
-                ],
+                &spec(scene, false),
                 1,
             )?);
             p.allocate_set(
@@ -309,7 +333,8 @@ impl ShadePass {
         };
         push.set_camera(scene.camera.position);
         push.set_material(&scene.material);
-        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push })
+        let planes = planes(scene);
+        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push, planes })
     }
 
     pub fn record(&self, rec: &mut Recorder) {
@@ -324,9 +349,16 @@ impl ShadePass {
         });
     }
 
-    /// The shading buffer: [`PLANES`] planes × W×H × vec4 (the module docs list them).
+    /// The shading buffer: [`ShadePass::planes`] planes × W×H × RGB `f32` (the module docs
+    /// list them).
     pub fn output(&self) -> &Buffer {
         &self.output
+    }
+
+    /// Planes in the shading buffer ([`planes`] of the scene at creation: 6, or 3 without the
+    /// glossy ones).
+    pub fn planes(&self) -> usize {
+        self.planes
     }
 
     /// Light, triple, albedo, constants and output buffers, for the indirect mode of the
@@ -351,21 +383,25 @@ impl ShadePass {
         &mut self.push
     }
 
-    /// Reads layer `layer` back as RGB (waits).
+    /// Reads layer `layer` back as RGB (waits); zeros for a glossy layer of a diffuse surface
+    /// (it has no glossy planes).
     pub fn read_layer(&self, ctx: &Context, layer: usize) -> Result<Vec<[f32; 3]>> {
-        let plane = (self.push.width * self.push.height) as u64;
-        let v = memory::download_f32(ctx, &self.output, layer as u64 * plane * 4, plane * 4)?;
-        Ok(v.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect())
+        let texels = (self.push.width * self.push.height) as usize;
+        if layer >= self.planes && layer < PLANES {
+            return Ok(vec![[0.0; 3]; texels]);
+        }
+        let v = self.read_plane(ctx, layer)?;
+        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
 
-    /// Diagnostics: plane `plane` (< [`PLANES`]) of the shading buffer as raw `vec4`s (rgb and
-    /// the constant 1 in w), read back (waits).
+    /// Diagnostics: plane `plane` (< [`ShadePass::planes`]) of the shading buffer as raw
+    /// floats (RGB per texel), read back (waits).
     pub fn read_plane(&self, ctx: &Context, plane: usize) -> Result<Vec<f32>> {
-        if plane >= PLANES {
-            return Err(crate::error::Error::param("shading plane", plane, format!("< {PLANES}")));
+        if plane >= self.planes {
+            return Err(crate::error::Error::param("shading plane", plane, format!("< {}", self.planes)));
         }
-        let texels = (self.push.width * self.push.height) as u64;
-        memory::download_f32(ctx, &self.output, plane as u64 * texels * 4, texels * 4)
+        let floats = (self.push.width * self.push.height) as u64 * 3;
+        memory::download_f32(ctx, &self.output, plane as u64 * floats, floats)
     }
 
     /// Diagnostics: the incident SH radiance `T` of the direct light (`W·H·n²` `vec4`s), read

@@ -281,7 +281,10 @@ pub struct GatherPush {
     pub vector: u32,
     /// `n²` SH coefficients per texel of the incident buffers.
     pub n2: u32,
-    pub pad: [u32; 2],
+    /// 1: the shading buffer has the glossy planes (`shade::planes`), and bounce 1 adds the
+    /// direct glossy plane (scalar pyramid).
+    pub glossy: u32,
+    pub pad: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
@@ -536,7 +539,7 @@ mod layout_against_glsl {
             probes,
             radiance_planes
         });
-        layout!(GatherPush { width, height, from_bounce, channel_stride, vector, n2 });
+        layout!(GatherPush { width, height, from_bounce, channel_stride, vector, n2, glossy });
         layout!(ViewPush { view_proj, width, height, texel_size, eye, eye_lo });
         layout!(WaterPush { width, height, wrap, drop_count, k, retain, rest_level, scale, drops });
         layout!(TruthPush {

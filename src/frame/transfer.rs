@@ -15,7 +15,8 @@ pub const STAGE_HEIGHTS_UPLOAD: &str = super::stages::stage_name("heights.upload
 /// Stage name of [`Renderer::record_read_layers`].
 pub const STAGE_READBACK: &str = super::stages::stage_name("shade.readback");
 
-/// The planes [`Renderer::record_read_layers`] copies, in [`ShadingLayers`] order.
+/// The planes [`Renderer::record_read_layers`] copies, in [`ShadingLayers`] order (those the
+/// shading buffer has: a diffuse surface has no glossy planes, whose layers read as zero).
 const PLANES: [usize; 5] = [LAYER_TOTAL, LAYER_DIRECT, LAYER_INDIRECT, LAYER_GLOSSY, PLANE_GLOSSY_INDIRECT];
 
 /// Where [`Renderer::record_read_layers`] put the layers in its ring.
@@ -24,18 +25,24 @@ pub struct LayersReadback {
     offset: u64,
     width: usize,
     height: usize,
+    /// How many of [`PLANES`] were copied (the rest are zero).
+    copied: usize,
 }
 
 impl LayersReadback {
     /// The layers, once the host has waited for the command buffer that copied them.
     pub fn layers(&self, ring: &mut StagingRing) -> Result<ShadingLayers> {
         let texels = self.width * self.height;
-        let plane = (texels * 16) as u64;
+        let plane = (texels * 12) as u64;
         let mut out: Vec<Vec<[f32; 3]>> = Vec::with_capacity(PLANES.len());
-        for i in 0..PLANES.len() as u64 {
-            let bytes = ring.read(self.offset + i * plane, plane)?;
+        for i in 0..PLANES.len() {
+            if i >= self.copied {
+                out.push(vec![[0.0; 3]; texels]);
+                continue;
+            }
+            let bytes = ring.read(self.offset + i as u64 * plane, plane)?;
             let v: Vec<[f32; 3]> = bytes
-                .chunks_exact(16)
+                .chunks_exact(12)
                 .map(|c| {
                     std::array::from_fn(|k| f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]))
                 })
@@ -94,12 +101,13 @@ impl Renderer {
     pub fn record_read_layers(&self, rec: &mut Recorder, ring: &mut StagingRing) -> Result<LayersReadback> {
         let l = self.pyramid.layout().levels[0];
         let (width, height) = (l.width as usize, l.height as usize);
-        let plane = (width * height * 16) as u64;
-        let offset = ring.reserve(plane * PLANES.len() as u64)?;
+        let plane = (width * height * 12) as u64;
+        let copied = PLANES.iter().take_while(|&&p| p < self.shade.planes()).count();
+        let offset = ring.reserve(plane * copied as u64)?;
         let (src, dst) = (self.shade.output().raw, ring.buffer().raw);
         rec.scope(STAGE_READBACK, |ctx, cmd| {
             barrier::compute_to_transfer(ctx, cmd);
-            let regions: Vec<vk::BufferCopy> = PLANES
+            let regions: Vec<vk::BufferCopy> = PLANES[..copied]
                 .iter()
                 .enumerate()
                 .map(|(i, p)| {
@@ -112,6 +120,6 @@ impl Renderer {
             unsafe { ctx.device().cmd_copy_buffer(cmd, src, dst, &regions) };
             barrier::transfer_to_host(ctx, cmd);
         });
-        Ok(LayersReadback { offset, width, height })
+        Ok(LayersReadback { offset, width, height, copied })
     }
 }

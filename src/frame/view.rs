@@ -6,7 +6,7 @@
 //!
 //! Inputs are bound when the pass is created (they are stable per [`Renderer`]): the heights
 //! buffer (`f32`, row-major `W × H` from offset 0; [`Renderer::heights_buffer`]) and the shading
-//! buffer (`vec4` per texel, plane 0 = total; [`Renderer::shading_buffer`]). Vertices are made
+//! buffer (RGB `f32` per texel, plane 0 = total; [`Renderer::shading_buffer`]). Vertices are made
 //! in the vertex shader from the vertex and instance index (one instance per row of quads, one
 //! small index buffer built once), so heights written on the GPU every frame need no upload.
 //!
@@ -529,7 +529,7 @@ impl ViewPass {
         opts: &ViewOptions,
     ) -> Result<Self> {
         let texels = check_field_size(width, height)?;
-        for (name, buf, need) in [("heights", inputs.heights, texels * 4), ("shading", inputs.shading, texels * 16)] {
+        for (name, buf, need) in [("heights", inputs.heights, texels * 4), ("shading", inputs.shading, texels * 12)] {
             if buf.size < need {
                 return Err(Error::param(
                     format!("view: {name} buffer '{}' size", buf.name),
