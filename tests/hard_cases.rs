@@ -1,8 +1,8 @@
 //! Numerically hard inputs (docs/hard-cases.md). Every case asserts
 //!
 //! (a) no NaN/Inf in any intermediate GPU buffer (`Renderer::debug_buffers`: pyramid levels and
-//!     stack, visibility V, shading planes, radiance pyramid, U, bounce buffer) nor in the
-//!     exported layers;
+//!     stack, visibility V, shading planes, radiance pyramid, U, the level 0 the last bounce
+//!     leaves for the next) nor in the exported layers;
 //! (b) physical bounds on the exported layers (stated in [`bounds`]);
 //! (c) agreement with a reference: the f64 CPU twin (`render_gi`, relative L2 ≤ 1e-3 per
 //!     layer), analytic values, or the same field without its offset;

@@ -390,12 +390,14 @@ fn later_bounces_without_probes_get_a_scan_pipeline_without_the_bound() {
     assert_eq!(two_probed, one, "probed bounces share the bounded pipeline");
 }
 
-/// What the next bounce gathers (docs/indirect.md §1): the bounce buffer holds, rgb per texel,
-/// the last bounce's diffuse + glossy exit radiance with the scalar pyramid, and the diffuse
-/// part alone with the vector pyramid (which carries the glossy light as T). After one bounce
-/// the indirect planes hold exactly that bounce's exit radiance, so they are the expectation.
+/// What the next bounce starts from (docs/indirect.md §1): the indirect shade leaves in level 0
+/// of the radiance pyramid, rgb per texel, the bounce's diffuse + glossy exit radiance with the
+/// scalar pyramid, and the diffuse part alone with the vector pyramid (which carries the glossy
+/// light as T). After one bounce the indirect planes hold exactly that bounce's exit radiance,
+/// so they are the expectation. (A shade that wrote the diffuse part alone, or nothing, so that
+/// level 0 kept the gathered direct light, fails it.)
 #[test]
-fn the_bounce_buffer_holds_what_the_next_bounce_gathers() {
+fn the_indirect_shade_writes_the_next_bounces_level_0() {
     let ctx = gpu();
     let (w, h) = (20, 17);
     let mut s = bright(rough_field(w, h, 3));
@@ -406,7 +408,7 @@ fn the_bounce_buffer_holds_what_the_next_bounce_gathers() {
         s.gi.glossy_pyramid = if vector { GlossyPyramid::Vector } else { GlossyPyramid::Scalar };
         let b = debug_buffers(&ctx, &s);
         let get = |name: &str| find_buffer(&b, name);
-        let (bounce, diffuse, glossy) = (get("indirect.bounce"), get("shade.indirect"), get("shade.glossy_indirect"));
+        let (bounce, diffuse, glossy) = (get("indirect.next"), get("shade.indirect"), get("shade.glossy_indirect"));
         assert_eq!(bounce.len(), 3 * w * h, "rgb per texel");
         let mut max_glossy = 0.0f32;
         for t in 0..w * h {

@@ -146,12 +146,12 @@ struct hfgi_IndirectPush {
 struct hfgi_GatherPush {
     uint width;
     uint height;
-    uint from_bounce;    // 0: direct exit radiance (shade planes 1 + 4), 1: bounce buffer
     uint channel_stride; // floats per channel in the radiance levels buffer
     uint vector;         // 1: channels 0-2 diffuse only, then 3 n² incident SH channels
     uint n2;
     uint glossy;         // 1: the shading buffer has the glossy planes (direct glossy: plane 4)
     uint pad0;
+    uint pad1;
 };
 
 // Push constants of the view raster pass (glsl/view/raster.vert.glsl). 112 bytes.

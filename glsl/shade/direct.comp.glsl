@@ -5,7 +5,9 @@
 // Visibility comes from the (possibly sub-sampled) receiver grid, interpolated bilinearly;
 // normals are always full resolution (fig. 7).
 // With HFGI_INDIRECT = 1 the same shader shades one indirect bounce (docs/indirect.md §4): the
-// incident radiance is the IR vector U of eq. 21 (RGB, from binding 1) instead of L ⊛ V.
+// incident radiance is the IR vector U of eq. 21 (RGB, from binding 1) instead of L ⊛ V, and
+// the bounce's exit radiance goes straight into level 0 of the radiance pyramid (binding 7),
+// the next bounce's input.
 //
 // Output planes (RGB f32 triples, W×H each): 0 total, 1 direct, 2 indirect (Σ bounces), and
 // for a glossy surface (HFGI_GLOSSY) 3 glossy, 4 glossy of the direct light, 5 glossy of the
@@ -15,7 +17,7 @@
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;
 layout(constant_id = 1) const int HFGI_INDIRECT = 0;
-layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (glossy vector pyramid)
+layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T (glossy vector pyramid): binding 8, or 7 in indirect mode
 // Sphere blockers (docs/blockers.md §4; frame::blockers::shading_mode): 0 none; 1 product: T is
 // multiplied by their visibility V_s (binding 9); 2 log: as 1, but the environment set (set 0)
 // takes the combined exp*(f_hf + Σ f_i) (binding 9's second vector) instead of L ⊛ V_env ⊛ V_s;
@@ -25,6 +27,7 @@ layout(constant_id = 2) const int HFGI_STORE_T = 0; // 1: write T to binding 8 (
 layout(constant_id = 3) const uint HFGI_BLOCKERS = 0u;
 layout(constant_id = 4) const uint HFGI_HALF = 0u; // gi.storage of binding 1: 1 = f16 (hfgi_store.glsl)
 layout(constant_id = 5) const int HFGI_GLOSSY = 0; // 1: the buffer has the glossy planes 3-5 (shade::planes)
+layout(constant_id = 6) const uint HFGI_NEXT_STRIDE = 0u; // indirect mode: floats per channel of binding 7
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
@@ -39,8 +42,8 @@ layout(std430, binding = 5) readonly buffer Consts {
     uint hfgi_triple_count;
 };
 layout(std430, binding = 6) buffer Out { float hfgi_out[]; };                 // 6 (3 without HFGI_GLOSSY) planes × W×H × rgb
-layout(std430, binding = 7) writeonly buffer Bounce { float hfgi_bounce[]; }; // indirect: the next bounce's radiance, rgb per texel
-layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // texel × n²: T (HFGI_STORE_T)
+layout(std430, binding = 7) writeonly buffer Next { float hfgi_next[]; };    // indirect: the radiance levels (level 0 = the next bounce's input)
+layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // direct: texel × n²: T (HFGI_STORE_T)
 layout(std430, binding = 9) readonly buffer Blockers { float hfgi_bv[]; };     // receivers × n² (× 2 in log mode)
 layout(std430, binding = 10) readonly buffer BSpheres { vec4 hfgi_spheres[]; }; // per slot: (c_hi, r), (c_lo, 0)
 layout(push_constant) uniform Push { hfgi_ShadePush pc; };
@@ -261,7 +264,7 @@ void main() {
     }
     uint plane = pc.width * pc.height;
     uint idx = uint(p.y) * pc.width + uint(p.x);
-    if (HFGI_STORE_T != 0) {
+    if (HFGI_STORE_T != 0 && HFGI_INDIRECT == 0) {
         for (int k = 0; k < HFGI_N2; ++k) hfgi_incident[idx * uint(HFGI_N2) + uint(k)] = vec4(hfgi_T[k], 0.0);
     }
     // Plane indices: HFGI_PLANE_* (src/constants.rs, defined by build.rs).
@@ -269,10 +272,17 @@ void main() {
     uint at_gd = HFGI_PLANE_GLOSSY_DIRECT * plane + idx, at_gi = HFGI_PLANE_GLOSSY_INDIRECT * plane + idx;
     if (HFGI_INDIRECT != 0) {
         // `direct` and `glossy` hold this bounce's diffuse and glossy exit radiance; the next
-        // bounce's radiance pyramid (§5.3) gathers their sum (the scalar approximation for
-        // mixtures), or the diffuse part alone beside T (glossy vector pyramid).
+        // bounce's radiance pyramid (§5.3) starts from their sum (the scalar approximation for
+        // mixtures), or from the diffuse part alone beside T (glossy vector pyramid), written
+        // here into its level 0 (W×H at offset 0 of each channel) as radiance.gather writes
+        // bounce 1's: channels 0-2 the radiance, then (vector) channel 3 + 3k + c = T_k.
         vec3 next = HFGI_STORE_T != 0 ? direct : direct + glossy;
-        for (uint c = 0u; c < 3u; ++c) hfgi_bounce[3u * idx + c] = next[c];
+        for (uint c = 0u; c < 3u; ++c) hfgi_next[c * HFGI_NEXT_STRIDE + idx] = next[c];
+        if (HFGI_STORE_T != 0) {
+            for (uint k = 0u; k < uint(HFGI_N2); ++k) {
+                for (uint c = 0u; c < 3u; ++c) hfgi_next[(3u + 3u * k + c) * HFGI_NEXT_STRIDE + idx] = hfgi_T[k][c];
+            }
+        }
         if (pc.accumulate != 0u) {
             direct += hfgi_out_get(at_indirect);
             if (HFGI_GLOSSY != 0) glossy += hfgi_out_get(at_gi);

@@ -6,8 +6,8 @@
 //! - `indirect.shade`: the shading shader in indirect mode (`glsl/shade/direct.comp.glsl`,
 //!   `HFGI_INDIRECT = 1`) shades `U` with the diffuse and Phong lobes at full resolution, adds
 //!   the bounce to the shading planes `indirect` and indirect glossy, recomposes `total` and
-//!   `glossy`, and writes the bounce's exit radiance (the next bounce's input) to the bounce
-//!   buffer.
+//!   `glossy`, and writes the bounce's exit radiance (the next bounce's input) straight into
+//!   level 0 of the radiance pyramid (after this bounce's scan has read the pyramid).
 //!
 //! With [`uses_max_bound`] the pass also owns the max pyramid (stage `pyramid.max`,
 //! [`MaxPyramid`]; the renderer records it when the heights change) and the scan skips what it
@@ -43,7 +43,7 @@ pub struct IndirectPass {
     scans: Vec<(bool, ComputePipeline, vk::DescriptorSet)>,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
-    buffers: Vec<Buffer>, // samples, fold, radiance levels, U, bounce, incident
+    buffers: Vec<Buffer>, // samples, fold, radiance levels, U
     push: IndirectPush,
     /// `gi.radial_probes_later` (`push.probes` is the first bounce's).
     probes_later: u32,
@@ -115,9 +115,8 @@ pub(crate) fn buffer_sizes(
     samples: usize,
     fold: usize,
     ladder: usize,
-) -> [(&'static str, u64); 6] {
+) -> [(&'static str, u64); 4] {
     let n = scene.gi.sh_order;
-    let (w, h) = (scene.field.width(), scene.field.height());
     // U: receivers × n² × rgb in gi.storage (glsl/inc/hfgi_store.glsl).
     let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(3 * n * n) as u64);
     [
@@ -125,9 +124,6 @@ pub(crate) fn buffer_sizes(
         ("hfgi.indirect.fold", fold as u64 * 4),
         ("hfgi.indirect.radiance_level", ladder as u64 * 4),
         ("hfgi.indirect.u", u_bytes),
-        // The next bounce's radiance: rgb f32 per texel (glsl/shade/direct.comp.glsl).
-        ("hfgi.indirect.bounce", (w * h * 12) as u64),
-        ("hfgi.indirect.incident", if vector_pyramid(scene) { (w * h * n * n * 16) as u64 } else { 16 }),
     ]
     .map(|(name, size)| (name, size.max(16)))
 }
@@ -197,8 +193,8 @@ fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, bound: bool) -> Vec
 }
 
 /// The shading shader in indirect mode (`indirect.shade`).
-fn shade_pipeline(ctx: &Context, scene: &Scene) -> Result<ComputePipeline> {
-    let spec = super::shade::spec(scene, true);
+fn shade_pipeline(ctx: &Context, scene: &Scene, next_stride: u32) -> Result<ComputePipeline> {
+    let spec = super::shade::spec(scene, Some(next_stride));
     let size = std::mem::size_of::<ShadePush>() as u32;
     ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &[DescriptorKind::StorageBuffer; 11], size, &spec, 1)
 }
@@ -216,8 +212,6 @@ fn scan_chunks(gi: &crate::scene::model::GiSettings, ladder: usize, sets: [(u32,
 }
 
 const U: usize = 3;
-const BOUNCE: usize = 4;
-const INCIDENT: usize = 5;
 
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
@@ -261,9 +255,7 @@ impl IndirectPass {
                 (radiance_stack_levels(&levels), gi.storage),
                 RadianceInputs {
                     shade: shade.output(),
-                    bounce: &bufs[BOUNCE],
                     incident_direct: shade.incident(),
-                    incident_bounce: &bufs[INCIDENT],
                     glossy_planes: super::shade::glossy_planes(scene),
                 },
             )?);
@@ -301,7 +293,7 @@ impl IndirectPass {
                 let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds12, size, &spec, 1)?;
                 scan_sets.push(pipes.push_get(scan).allocate_set(ctx, &binds)?);
             }
-            let sh = pipes.push_get(shade_pipeline(ctx, scene)?);
+            let sh = pipes.push_get(shade_pipeline(ctx, scene, rad.pyramid.layout().total as u32)?);
             let shade_set = sh.allocate_set(
                 ctx,
                 &[
@@ -312,10 +304,10 @@ impl IndirectPass {
                     Bind::Buffer(albedo),
                     Bind::Buffer(consts),
                     Bind::Buffer(output),
-                    Bind::Buffer(&bufs[BOUNCE]),
-                    Bind::Buffer(&bufs[INCIDENT]),
-                    Bind::Buffer(blockers.unwrap_or(output)), // unread without spheres
-                    Bind::Buffer(output),                     // the spheres: unread by the bounces
+                    Bind::Buffer(rad.pyramid.levels_buffer()), // the next bounce's level 0
+                    Bind::Buffer(output),                      // T of the direct mode: unused here
+                    Bind::Buffer(blockers.unwrap_or(output)),  // unread without spheres
+                    Bind::Buffer(output),                      // the spheres: unread by the bounces
                 ],
             )?;
             Ok((scan_sets, shade_set, push))
@@ -430,22 +422,17 @@ impl IndirectPass {
         super::storage::download_vectors(ctx, &self.buffers[U], self.storage, 0, receivers, values)
     }
 
-    /// Diagnostics: the bounce buffer, the radiance the last bounce leaves for the next one to
-    /// gather (rgb per texel, `W × H`: its diffuse + glossy exit radiance, or the diffuse part
-    /// alone with the glossy vector pyramid), read back (waits).
-    pub fn read_bounce(&self, ctx: &Context) -> Result<Vec<f32>> {
-        let b = &self.buffers[BOUNCE];
-        memory::download_f32(ctx, b, 0, b.size / 4)
-    }
-
-    /// Diagnostics: the last bounce's incident SH radiance per texel (vector pyramid only;
-    /// `None` otherwise), read back (waits).
-    pub fn read_incident(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
-        let b = &self.buffers[INCIDENT];
-        if b.size <= 16 {
-            return Ok(None);
-        }
-        memory::download_f32(ctx, b, 0, b.size / 4).map(Some)
+    /// Diagnostics: the radiance the last bounce leaves for the next one in level 0 of the
+    /// radiance pyramid, as rgb per texel (`W × H`: its diffuse + glossy exit radiance, or the
+    /// diffuse part alone with the glossy vector pyramid), read back (waits).
+    pub fn read_next(&self, ctx: &Context) -> Result<Vec<f32>> {
+        let p = &self.radiance.pyramid;
+        let (l0, stride) = (p.layout().levels[0], p.layout().total);
+        let texels = l0.width as u64 * l0.height as u64;
+        let ch = (0..3u64)
+            .map(|c| memory::download_f32(ctx, p.levels_buffer(), c * stride, texels))
+            .collect::<Result<Vec<_>>>()?;
+        Ok((0..texels as usize).flat_map(|t| [ch[0][t], ch[1][t], ch[2][t]]).collect())
     }
 
     pub fn memory_bytes(&self) -> u64 {

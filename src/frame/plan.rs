@@ -13,7 +13,8 @@
 //!   heights keep all of them;
 //! - `visibility.environment` only with a non-zero environment (some SH coefficient ≠ 0),
 //!   `visibility.key_lights` only with key lights;
-//! - `shade.direct`, then per bounce `b = 1..B`: `radiance.gather`, `radiance.decimate`,
+//! - `shade.direct`, then per bounce `b = 1..B`: `radiance.gather` (bounce 1 only: the shade
+//!   of bounce `b − 1` writes the next bounce's level 0), `radiance.decimate`,
 //!   `radiance.synthesize` (stack mode and scalar radiance pyramid only), `indirect.scan`,
 //!   `indirect.shade` — the indirect stages only with `gi.bounces > 0` and a surface that
 //!   reflects light (albedo or specular non-zero);
@@ -219,6 +220,8 @@ pub struct Planner {
     bounces: u32,
     albedo: bool,
     specular: bool,
+    /// The shading buffer's planes (`shade::planes`: 6 with a specular colour, else 3).
+    shading_planes: usize,
     indirect: bool,
     glossy_pyramid: GlossyPyramid,
     vector: bool,
@@ -284,6 +287,7 @@ impl Planner {
             bounces: gi.bounces,
             albedo,
             specular: m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0)),
+            shading_planes: super::shade::planes(scene),
             indirect: needs_indirect(scene),
             glossy_pyramid: gi.glossy_pyramid,
             vector,
@@ -454,14 +458,15 @@ impl Planner {
             let n = self.bounces;
             for b in 1..=n {
                 let of = format!("gi.bounces = {n}, bounce {b} of {n}");
-                let src = if b == 1 {
-                    "the direct exit radiance".to_string()
+                let kind = self.radiance_kind();
+                if b == 1 {
+                    let r = format!("{of}: gathers the direct exit radiance ({when})");
+                    add(&mut stages, Stage::RadianceGather(b), r);
+                    add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {kind}"));
                 } else {
-                    format!("bounce {}'s exit radiance", b - 1)
-                };
-                let first = if b == 1 { format!(" ({when})") } else { String::new() };
-                add(&mut stages, Stage::RadianceGather(b), format!("{of}: gathers {src}{first}"));
-                add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {}", self.radiance_kind()));
+                    let r = format!("{of}: {kind}, from bounce {}'s exit radiance (its shade wrote level 0)", b - 1);
+                    add(&mut stages, Stage::RadianceDecimate(b), r);
+                }
                 if synthesize {
                     let r = format!(
                         "{of}: stack mode, scalar radiance pyramid: the {} of {} levels the scan reads",

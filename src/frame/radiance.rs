@@ -3,10 +3,11 @@
 //! radiance, one scalar pyramid per RGB channel, built exactly like the height pyramid (same
 //! filters and storage mode, level step `k_u`).
 //!
-//! Input: bounce 1 reads the direct exit radiance (shading planes `direct` + direct glossy:
-//! the paper's scalar approximation for mixtures); bounce `b > 1` reads the bounce buffer the
-//! previous indirect shade wrote (rgb per texel, that sum already formed). Output: the levels
-//! (and stack) buffers of [`RadiancePyramid::pyramid`], table entries with `source = 1`.
+//! Input: bounce 1's gather reads the direct exit radiance (shading planes `direct` + direct
+//! glossy: the paper's scalar approximation for mixtures) into level 0; for bounce `b > 1` the
+//! indirect shade of bounce `b − 1` has written that sum into level 0 itself (no gather, no
+//! buffer in between). Output: the levels (and stack) buffers of
+//! [`RadiancePyramid::pyramid`], table entries with `source = 1`.
 //! Barriers: compute→compute after each stage.
 
 use ash::vk;
@@ -44,16 +45,13 @@ pub(crate) fn shape(mode: PyramidMode, vector_n2: Option<u32>) -> (u32, PyramidM
     }
 }
 
-/// Where the gather reads bounce `b`'s input (docs/indirect.md §1).
+/// Where the gather reads bounce 1's input (docs/indirect.md §1).
 pub struct RadianceInputs<'a> {
-    /// The shading planes (bounce 1: direct diffuse and direct glossy).
+    /// The shading planes (direct diffuse and direct glossy).
     pub shade: &'a Buffer,
-    /// The previous bounce's diffuse and glossy planes (bounces > 1).
-    pub bounce: &'a Buffer,
-    /// Incident SH radiance per texel of the direct light and of the previous bounce (vector
-    /// pyramid only; any buffer otherwise).
+    /// Incident SH radiance per texel of the direct light (vector pyramid only; any buffer
+    /// otherwise).
     pub incident_direct: &'a Buffer,
-    pub incident_bounce: &'a Buffer,
     /// Whether the shading buffer has the glossy planes (`shade::planes`).
     pub glossy_planes: bool,
 }
@@ -86,13 +84,8 @@ impl RadiancePyramid {
         let (stack_levels, storage) = stack;
         let kind = radiance_kind(channels, storage);
         let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, kind, Some(stack_levels))?;
-        let binds = [
-            Bind::Buffer(inputs.shade),
-            Bind::Buffer(inputs.bounce),
-            Bind::Buffer(pyramid.levels_buffer()),
-            Bind::Buffer(inputs.incident_direct),
-            Bind::Buffer(inputs.incident_bounce),
-        ];
+        let binds =
+            [Bind::Buffer(inputs.shade), Bind::Buffer(pyramid.levels_buffer()), Bind::Buffer(inputs.incident_direct)];
         let push_size = std::mem::size_of::<GatherPush>() as u32;
         let made = ComputePipeline::with_storage_set(ctx, &shaders::RADIANCE_GATHER_COMP, push_size, &binds);
         match made {
@@ -100,12 +93,11 @@ impl RadiancePyramid {
                 let push = GatherPush {
                     width: size.0 as u32,
                     height: size.1 as u32,
-                    from_bounce: 0,
                     channel_stride: pyramid.layout().total as u32,
                     vector: vector_n2.is_some() as u32,
                     n2: vector_n2.unwrap_or(0),
                     glossy: inputs.glossy_planes as u32,
-                    pad: 0,
+                    pad: [0; 2],
                 };
                 Ok(Self { pyramid, gather, set, push })
             }
@@ -116,16 +108,19 @@ impl RadiancePyramid {
         }
     }
 
-    /// Records gather + decimate (+ synthesize) for bounce `bounce` (1-based).
+    /// Records bounce `bounce`'s pyramid (1-based): the gather for bounce 1 (later bounces'
+    /// level 0 was written by the previous indirect shade), then decimate (+ synthesize).
     pub fn record(&self, rec: &mut Recorder, bounce: u32) {
-        self.record_gather(rec, bounce);
+        if bounce == 1 {
+            self.record_gather(rec);
+        }
         self.pyramid.record(rec);
     }
 
-    /// Records the gather of bounce `bounce`'s input (stage `radiance.gather`).
-    pub fn record_gather(&self, rec: &mut Recorder, bounce: u32) {
+    /// Records the gather of bounce 1's input (stage `radiance.gather`).
+    pub fn record_gather(&self, rec: &mut Recorder) {
         rec.scope(STAGE_GATHER, |ctx, cmd| {
-            let push = GatherPush { from_bounce: (bounce > 1) as u32, ..self.push };
+            let push = self.push;
             let g =
                 [groups(push.width, crate::constants::WORKGROUP), groups(push.height, crate::constants::WORKGROUP), 1];
             self.gather.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);

@@ -217,7 +217,7 @@ impl Renderer {
             Stage::VisibilityBlockers => self.blockers.iter().for_each(|b| b.record(rec)),
             Stage::ShadeDirect => self.shade.record(rec),
             Stage::ShadeLocalLights => self.local.iter().for_each(|l| l.record(rec)),
-            Stage::RadianceGather(b) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec, b)),
+            Stage::RadianceGather(_) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec)),
             Stage::RadianceDecimate(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_decimate(rec)),
             Stage::RadianceSynthesize(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_synthesize(rec)),
             Stage::IndirectScan(b) => ind.into_iter().for_each(|i| i.record_scan(rec, b)),
@@ -356,12 +356,14 @@ impl Renderer {
     /// - `pyramid.level{i}` (level `i` of the height pyramid, `W_i × H_i`) and, in stack mode,
     ///   `pyramid.stack{i}` (plane `i` at the working resolution, for the levels the stack keeps);
     /// - `visibility.v.{set}` (`set` = `environment` or `key{k}`): receivers × `n²`;
-    /// - `shade.{plane}` for the six planes of the shading buffer (`total`, `direct`,
-    ///   `indirect`, `glossy`, `glossy_direct`, `glossy_indirect`), raw `vec4`s (w = 1), and
-    ///   `shade.incident` (`T` per texel) with the glossy vector pyramid;
-    /// - with indirect light: `radiance.levels` (every channel), `radiance.stack` (stack mode),
-    ///   `indirect.u` (the last bounce's `U`), `indirect.bounce` (the radiance it leaves for
-    ///   a next bounce, rgb per texel) and, with the vector pyramid, `indirect.incident`.
+    /// - `shade.{plane}` for the planes of the shading buffer (`total`, `direct`, `indirect`
+    ///   and, for a glossy surface, `glossy`, `glossy_direct`, `glossy_indirect`), rgb per
+    ///   texel, and `shade.incident` (`T` per texel) with the glossy vector pyramid;
+    /// - with indirect light: `radiance.levels` (every channel; level 0 holds what the last
+    ///   bounce's shade left for a next bounce, the coarser levels that bounce's own input),
+    ///   `radiance.stack` (stack mode), `indirect.u` (the last bounce's `U`) and `indirect.next`
+    ///   (channels 0–2 of level 0 as rgb per texel: the radiance the last bounce leaves for a
+    ///   next one).
     ///
     /// Call after a recorded frame has completed (before it, buffers that no frame wrote yet
     /// hold undefined values). For tests and debugging; not part of a frame.
@@ -399,10 +401,7 @@ impl Renderer {
                 out.push(("radiance.stack".to_string(), st));
             }
             out.push(("indirect.u".to_string(), ind.read_u(ctx)?));
-            out.push(("indirect.bounce".to_string(), ind.read_bounce(ctx)?));
-            if let Some(t) = ind.read_incident(ctx)? {
-                out.push(("indirect.incident".to_string(), t));
-            }
+            out.push(("indirect.next".to_string(), ind.read_next(ctx)?));
         }
         Ok(out)
     }

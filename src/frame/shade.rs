@@ -199,15 +199,18 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
 }
 
 /// Specialization constants of `glsl/shade/direct.comp.glsl`, in its direct mode
-/// (`shade.direct`) or its indirect mode (`indirect.shade`).
-pub(crate) fn spec(scene: &Scene, indirect: bool) -> [(u32, u32); 6] {
+/// (`shade.direct`, `next_stride = None`) or its indirect mode (`indirect.shade`:
+/// `Some(floats per channel of the radiance levels buffer)`, where it writes the next bounce's
+/// input).
+pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 7] {
     [
         (0, scene.gi.sh_order as u32),
-        (1, indirect as u32),
+        (1, next_stride.is_some() as u32),
         (2, super::renderer::vector_pyramid(scene) as u32),
         (3, super::blockers::shading_mode(scene)),
         (4, scene.gi.storage.spec()),
         (5, glossy_planes(scene) as u32),
+        (6, next_stride.unwrap_or(0)),
     ]
 }
 
@@ -286,7 +289,7 @@ impl ShadePass {
                 &shaders::SHADE_DIRECT_COMP,
                 &[DescriptorKind::StorageBuffer; 11],
                 std::mem::size_of::<ShadePush>() as u32,
-                &spec(scene, false),
+                &spec(scene, None),
                 1,
             )?);
             p.allocate_set(
@@ -299,7 +302,7 @@ impl ShadePass {
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[3]),
                     Bind::Buffer(&bufs[4]),
-                    Bind::Buffer(&bufs[4]), // bounce output: unused by the direct mode
+                    Bind::Buffer(&bufs[4]), // the next bounce's level 0: unused by the direct mode
                     Bind::Buffer(&bufs[5]),
                     Bind::Buffer(blockers.map_or(&bufs[4], |b| b.output())), // unread without spheres
                     Bind::Buffer(blockers.map_or(&bufs[4], |b| b.spheres())),

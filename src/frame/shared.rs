@@ -272,9 +272,6 @@ pub struct IndirectPush {
 pub struct GatherPush {
     pub width: u32,
     pub height: u32,
-    /// 0: bounce 1 reads the direct exit radiance (shade planes 1 + 4); 1: the bounce buffer
-    /// (rgb per texel, summed by the indirect shade).
-    pub from_bounce: u32,
     /// Floats per channel in the radiance levels buffer (`PyramidLayout::total`).
     pub channel_stride: u32,
     /// 1: vector pyramid (diffuse only in channels 0–2, incident SH in channels 3…).
@@ -284,7 +281,7 @@ pub struct GatherPush {
     /// 1: the shading buffer has the glossy planes (`shade::planes`), and bounce 1 adds the
     /// direct glossy plane (scalar pyramid).
     pub glossy: u32,
-    pub pad: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
@@ -539,7 +536,7 @@ mod layout_against_glsl {
             probes,
             radiance_planes
         });
-        layout!(GatherPush { width, height, from_bounce, channel_stride, vector, n2, glossy });
+        layout!(GatherPush { width, height, channel_stride, vector, n2, glossy });
         layout!(ViewPush { view_proj, width, height, texel_size, eye, eye_lo });
         layout!(WaterPush { width, height, wrap, drop_count, k, retain, rest_level, scale, drops });
         layout!(TruthPush {

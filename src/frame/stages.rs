@@ -66,19 +66,24 @@ pub const STAGES: &[StageInfo] = &[
     row(
         "radiance.gather",
         "RadiancePyramid (IndirectPass)",
+        "as radiance.decimate, for bounce 1 only (the indirect shade of bounce b writes bounce b + 1's level 0)",
+        true,
+    ),
+    row(
+        "radiance.decimate",
+        "RadiancePyramid (IndirectPass)",
         "per bounce: indirect light, and the heights changed or the indirect light is out of date (amortised: an \
          odd frame when both halves are)",
         true,
     ),
-    row("radiance.decimate", "RadiancePyramid (IndirectPass)", "as radiance.gather", true),
     row(
         "radiance.synthesize",
         "RadiancePyramid (IndirectPass)",
-        "as radiance.gather, with the scalar pyramid in stack mode",
+        "as radiance.decimate, with the scalar pyramid in stack mode",
         true,
     ),
-    row("indirect.scan", "IndirectPass", "as radiance.gather", true),
-    row("indirect.shade", "IndirectPass", "as radiance.gather", true),
+    row("indirect.scan", "IndirectPass", "as radiance.decimate", true),
+    row("indirect.shade", "IndirectPass", "as radiance.decimate", true),
     row("heights.copy", "Renderer::record_heights_from_image", "the host's call, before Renderer::record", false),
     row("heights.upload", "Renderer::record_heights_upload", "the host's call, before Renderer::record", false),
     row("water.step", "WaterSim::record_step", "the host's call, before Renderer::record", false),

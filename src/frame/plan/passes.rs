@@ -60,7 +60,11 @@ impl Planner {
             PlannedPass {
                 name: "ShadePass",
                 created: true,
-                reason: "always: the shading texture (total, direct, indirect, glossy)".into(),
+                reason: if self.shading_planes > 3 {
+                    "always: the shading texture (total, direct, indirect, glossy and 2 internal glossy planes)".into()
+                } else {
+                    "always: the shading texture (total, direct, indirect; no glossy planes: no specular colour)".into()
+                },
             },
             PlannedPass {
                 name: "BlockerPass",
