@@ -94,16 +94,30 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records a copy of the exported layers into `ring` (a read-back ring; stage
-    /// `shade.readback`): a barrier after the frame's compute writes, the copies, a barrier to
-    /// host reads. After the host waited for the command buffer, [`LayersReadback::layers`]
-    /// returns what [`Renderer::read_layers`] would.
+    /// Bytes one [`Renderer::record_read_layers`] takes from a read-back ring: `12·W·H` per
+    /// plane it copies (5 for a glossy surface, 3 for a diffuse one), before the ring's
+    /// alignment of the start.
+    pub fn read_layers_bytes(&self) -> u64 {
+        let l = self.pyramid.layout().levels[0];
+        l.width as u64 * l.height as u64 * 12 * self.copied_planes() as u64
+    }
+
+    /// How many of [`PLANES`] the shading buffer has (the glossy ones only for a glossy surface).
+    fn copied_planes(&self) -> usize {
+        PLANES.iter().take_while(|&&p| p < self.shade.planes()).count()
+    }
+
+    /// Records a copy of the exported layers into `ring` (a read-back ring of at least
+    /// [`Renderer::read_layers_bytes`] free bytes; stage `shade.readback`): a barrier after the
+    /// frame's compute writes, the copies, a barrier to host reads. After the host waited for
+    /// the command buffer, [`LayersReadback::layers`] returns what [`Renderer::read_layers`]
+    /// would.
     pub fn record_read_layers(&self, rec: &mut Recorder, ring: &mut StagingRing) -> Result<LayersReadback> {
         let l = self.pyramid.layout().levels[0];
         let (width, height) = (l.width as usize, l.height as usize);
         let plane = (width * height * 12) as u64;
-        let copied = PLANES.iter().take_while(|&&p| p < self.shade.planes()).count();
-        let offset = ring.reserve(plane * copied as u64)?;
+        let copied = self.copied_planes();
+        let offset = ring.reserve(self.read_layers_bytes())?;
         let (src, dst) = (self.shade.output().raw, ring.buffer().raw);
         rec.scope(STAGE_READBACK, |ctx, cmd| {
             barrier::compute_to_transfer(ctx, cmd);
