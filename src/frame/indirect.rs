@@ -45,8 +45,8 @@ pub struct IndirectPass {
     shade_set: vk::DescriptorSet,
     buffers: Vec<Buffer>, // samples, fold, radiance levels, U
     push: IndirectPush,
-    /// `gi.radial_probes_later` (`push.probes` is the first bounce's).
-    probes_later: u32,
+    /// Radial probes of bounce 1 and of the later bounces (`GiSettings::probes`).
+    probes: [u32; 2],
     /// Azimuth chunks `(first, count)`, one dispatch each: of the first bounce's scan and of
     /// the later ones' (their probes and azimuth sets may differ, and a probe is a loop
     /// iteration like a sample).
@@ -148,7 +148,7 @@ fn scan_push(scene: &Scene, (ww, wh): (u32, u32), sample_count: u32, rad: &Radia
         scan_extent: super::shared::scan_extent(gi),
         specular: [k[0], k[1], k[2], 0.0],
         sample_offset: 0,
-        probes: gi.radial_probes,
+        probes: gi.probes(1),
         radiance_planes: rad.pyramid.stack_levels() as u32,
         pad: 0,
     }
@@ -166,8 +166,8 @@ fn bounded(has_max: bool, probes: u32) -> bool {
 /// bounces differ, theirs (a bounce past `gi.bounces` takes the first, which scans it exactly).
 fn scan_kinds(scene: &Scene, has_max: bool) -> Vec<bool> {
     let gi = &scene.gi;
-    let first = bounded(has_max, gi.radial_probes);
-    let later = gi.bounces > 1 && bounded(has_max, gi.radial_probes_later) != first;
+    let first = bounded(has_max, gi.probes(1));
+    let later = gi.bounces > 1 && bounded(has_max, gi.probes(2)) != first;
     if later {
         vec![first, !first]
     } else {
@@ -203,7 +203,7 @@ fn shade_pipeline(ctx: &Context, scene: &Scene, next_stride: u32) -> Result<Comp
 /// sample sets ([`ScanData::sets`]), against lavapipe's loop limit.
 fn scan_chunks(gi: &crate::scene::model::GiSettings, ladder: usize, sets: [(u32, u32); 2]) -> [Vec<(u32, u32)>; 2] {
     let (n, e) = (gi.sh_order, elevation::gpu_size(gi.elevation_basis, gi.sh_order));
-    [(gi.radial_probes, sets[0]), (gi.radial_probes_later, sets[1])].map(|(p, (first, count))| {
+    [(gi.probes(1), sets[0]), (gi.probes(2), sets[1])].map(|(p, (first, count))| {
         // A member adds an outer iteration of the scan's while-while loop and an e-vector.
         let cost = ladder * (1 + p as usize) * (e + 1) + n * n * e;
         let chunks = azimuth_chunks(count, cost as u32, INDIRECT_LOOP_BUDGET);
@@ -337,7 +337,7 @@ impl IndirectPass {
             buffers: bufs,
             chunks: scan_chunks(gi, ladder.len(), sets),
             push,
-            probes_later: gi.radial_probes_later,
+            probes: [gi.probes(1), gi.probes(2)],
             shade_push: shade.push(),
             n,
             storage: gi.storage,
@@ -374,7 +374,7 @@ impl IndirectPass {
     /// Records the scan of bounce `bounce` (1-based) of the radiance pyramid (stage
     /// `indirect.scan`).
     pub fn record_scan(&self, rec: &mut Recorder, bounce: u32) {
-        let probes = if bounce > 1 { self.probes_later } else { self.push.probes };
+        let probes = self.probes[(bounce > 1) as usize];
         let bound = bounded(self.max.is_some(), probes);
         // The pipeline of this kind; the first otherwise (never, as created): an unbounded
         // pipeline ignores the flag and a bounded one without it scans unbounded, both exactly.

@@ -101,8 +101,7 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     let work = gi.working_size(w, h);
     let n2 = gi.sh_order * gi.sh_order;
     let mut e = MemoryEstimate::default();
-    let n_v = crate::rules::layout::PyramidLayout::new(w, h, gi.level_step)?.count();
-    let stack = Some(super::pyramid::height_stack_levels(gi, n_v));
+    let stack = Some(super::pyramid::height_stack_of(gi, w, h)?);
     let heights = PyramidBuffers::new(w, h, work, gi.level_step, gi.pyramid, PyramidKind::HEIGHTS, stack, None)?;
     e.buffers(heights.named(PyramidKind::HEIGHTS));
     let vis = VisibilityData::new(scene);

@@ -93,6 +93,11 @@ pub(crate) fn height_stack_levels(gi: &crate::scene::model::GiSettings, n_v: usi
     scan_stack_levels(n_v, gi.level_step * gi.level_offset, gi.far_steps())
 }
 
+/// [`height_stack_levels`] of a `w × h` field's height pyramid (its `n_v` from the layout).
+pub(crate) fn height_stack_of(gi: &crate::scene::model::GiSettings, w: usize, h: usize) -> Result<usize> {
+    Ok(height_stack_levels(gi, PyramidLayout::new(w, h, gi.level_step)?.count()))
+}
+
 /// The name of a pyramid buffer: `hfgi.{label}.{part}` (`part`: `levels`, `table`, `stack`).
 pub(crate) fn buffer_name(kind: PyramidKind, part: &str) -> String {
     format!("hfgi.{}.{part}", kind.label)

@@ -11,7 +11,7 @@ use super::indirect::IndirectPass;
 use super::live::{self, Live, RendererOptions};
 use super::local::LocalLightPass;
 use super::plan::{FrameState, Plan, Planner, Stage};
-use super::pyramid::{HeightPyramid, PyramidKind, PyramidLayout};
+use super::pyramid::{HeightPyramid, PyramidKind};
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
 use crate::error::{Error, Result};
@@ -82,8 +82,7 @@ impl Renderer {
         let (w, h) = (scene.field.width(), scene.field.height());
         let work = scene.gi.working_size(w, h);
         let gi = &scene.gi;
-        let n_v = PyramidLayout::new(w, h, gi.level_step)?.count();
-        let stack = Some(super::pyramid::height_stack_levels(gi, n_v));
+        let stack = Some(super::pyramid::height_stack_of(gi, w, h)?);
         let kind = PyramidKind::HEIGHTS;
         let mut pyramid =
             HeightPyramid::with_kind(ctx, w, h, work, gi.level_step, gi.pyramid, scene.wrap, kind, stack)?;
