@@ -220,8 +220,8 @@ pub struct Planner {
     bounces: u32,
     albedo: bool,
     specular: bool,
-    /// The shading buffer's planes (`shade::planes`: 6 with a specular colour, else 3).
-    shading_planes: usize,
+    /// Whether the shading buffer has the glossy planes (`shade::glossy_planes`).
+    glossy_planes: bool,
     indirect: bool,
     glossy_pyramid: GlossyPyramid,
     vector: bool,
@@ -287,7 +287,7 @@ impl Planner {
             bounces: gi.bounces,
             albedo,
             specular: m.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0)),
-            shading_planes: super::shade::planes(scene),
+            glossy_planes: super::shade::glossy_planes(scene),
             indirect: needs_indirect(scene),
             glossy_pyramid: gi.glossy_pyramid,
             vector,

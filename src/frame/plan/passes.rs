@@ -60,7 +60,7 @@ impl Planner {
             PlannedPass {
                 name: "ShadePass",
                 created: true,
-                reason: if self.shading_planes > 3 {
+                reason: if self.glossy_planes {
                     "always: the shading texture (total, direct, indirect, glossy and 2 internal glossy planes)".into()
                 } else {
                     "always: the shading texture (total, direct, indirect; no glossy planes: no specular colour)".into()
