@@ -264,7 +264,7 @@ fn estimate_rejects_what_the_renderer_rejects() {
 }
 
 /// The figures for issue 12's documentation: a 512² field, default preset, 1 bounce, at each
-/// sub-sampling (no device).
+/// sub-sampling (no device); the default preset's storage is f16, less than f32's.
 #[test]
 fn estimate_512_by_subsample() {
     for sub in [1, 2, 4] {
@@ -273,6 +273,13 @@ fn estimate_512_by_subsample() {
         let r = memory::renderer(&scene).unwrap();
         let v = memory::view(&scene, &ViewOptions::default()).unwrap();
         assert!(r.total() > 0 && v.total() > 0);
+        // The default preset stores V, U and the radiance stack as halves (docs/performance.md §14).
+        let mut f16 = vec!["heightfield.size=512", "gi.quality=\"default\"", "gi.bounces=1", s.as_str()];
+        f16.push("gi.storage=\"f16\"");
+        let mut f32_ = f16.clone();
+        f32_[4] = "gi.storage=\"f32\"";
+        assert_eq!(r.total(), memory::renderer(&scene_of("", &f16)).unwrap().total());
+        assert!(r.total() < memory::renderer(&scene_of("", &f32_)).unwrap().total());
         let largest = r.largest().unwrap();
         println!(
             "512², default, 1 bounce, subsample {sub}: renderer {} B ({:.2} MiB; largest {} {:.2} MiB), view (960×540, ≤ 8 samples) {} B ({:.2} MiB)\n{r}",

@@ -9,7 +9,9 @@
 //! - The error it adds, against the exact reference (`render_truth_gpu`), on the hard fields of
 //!   `scenes/hard/` at a reduced size (as tests/accuracy.rs): at most 0.05 percentage points in
 //!   every layer, and the f16 shading within 1e-3 (relative L2) of the f32 shading.
-//! - The range: values beyond ±65504 are clamped, never infinite.
+//! - The range: `U` and the radiance stack are pre-exposed (`frame::storage::pre_exposure`), so
+//!   lights in physical units keep the half's precision, and the pre-exposure follows the live
+//!   lights.
 
 mod common;
 
@@ -154,12 +156,13 @@ fn f16_adds_no_error_on_a_steep_non_square_field_below_zero() {
     against_the_reference("steep.toml", "[48, 34]", &[]);
 }
 
-/// Values beyond the half's range are clamped to ±65504, never infinite: a key light of
-/// radiance 10¹¹ (within `limits::MAX_RADIANCE`) with f16 gives finite layers; its direct light
-/// (from `V`, bounded by √4π) is the f32 pipeline's within 1e-3, and its indirect light is below
-/// the f32 pipeline's (the clamp is reached: `U` and the radiance stack exceed the range).
+/// Pre-exposure (`frame::storage::pre_exposure`, docs/performance.md §14): `U` and the radiance
+/// stack are stored times a power of two that follows the lights, so a key light of radiance
+/// 10¹¹ (within `limits::MAX_RADIANCE`, 10⁶ times the half's range) renders with f16 within
+/// 1e-3 (relative L2) of f32 in every layer, and finite. Without it (scale 1: tried) `U` and the
+/// stack were clamped at 65504 and the indirect light lost more than half of its sum.
 #[test]
-fn f16_clamps_values_beyond_the_half_range() {
+fn f16_is_pre_exposed_so_physical_units_keep_their_precision() {
     let ctx = gpu();
     let mut s = scene(rough_field(32, 24, 9));
     s.gi.azimuths = 8;
@@ -167,13 +170,49 @@ fn f16_clamps_values_beyond_the_half_range() {
     s.key_lights = vec![key_light(40.0, 30.0, 0.27, 1e11)];
     let a = render_layers(&ctx, &with_storage(&s, Storage::F32));
     let b = render_layers(&ctx, &with_storage(&s, Storage::F16));
-    for (layer, v) in [("direct", &b.direct), ("indirect", &b.indirect), ("total", &b.total)] {
-        assert!(v.iter().flatten().all(|x| x.is_finite()), "f16 {layer} is not finite");
+    for (layer, x, y) in
+        [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
+    {
+        assert!(y.iter().flatten().all(|v| v.is_finite()), "f16 {layer} is not finite");
+        let e = rel_l2(y, &to64(x));
+        assert!(e <= 1e-3, "{layer}: f16 vs f32 {e:e}");
+        eprintln!("key light 1e11: {layer} f16 vs f32 {e:.2e}");
     }
-    let d = rel_l2(&b.direct, &to64(&a.direct));
-    assert!(d <= 1e-3, "direct f16 vs f32 {d:e}");
-    let sum = |v: &[[f32; 3]]| v.iter().flatten().map(|x| f64::from(*x)).sum::<f64>();
-    let (i32_, i16_) = (sum(&a.indirect), sum(&b.indirect));
-    assert!(i32_.is_finite() && i16_ < 0.5 * i32_, "indirect f32 {i32_:e}, f16 {i16_:e}: the clamp was not reached");
-    eprintln!("indirect light summed: f32 {i32_:e}, f16 (clamped) {i16_:e}; direct f16 vs f32 {d:.2e}");
+}
+
+/// Lights scaled by 2²⁰ after creation (`Renderer::set_environment`, `set_key_lights`) give, with
+/// f16, exactly 2²⁰ times the shading: the pre-exposure follows the live lights by the same power
+/// of two, so the same halves are stored. Without the renderer updating it, the scaled stack and
+/// `U` would pass the half's range (2¹⁰ · 2²⁰) and be clamped.
+#[test]
+fn f16_pre_exposure_follows_the_live_lights_exactly() {
+    let ctx = gpu();
+    let mut s = scene(rough_field(32, 24, 4));
+    s.gi.azimuths = 8;
+    s.gi.bounces = 2;
+    s.gi.amortize = false;
+    s = with_storage(&s, Storage::F16);
+    let mut r = hfgi::frame::Renderer::new(&ctx, &s).unwrap();
+    common::record_frame(&ctx, &mut r);
+    let a = r.read_layers(&ctx).unwrap();
+    let k = 2f64.powi(20);
+    let env = hfgi::scene::model::Environment { sh: s.environment.sh.iter().map(|c| c.map(|v| v * k)).collect() };
+    let keys: Vec<_> = s
+        .key_lights
+        .iter()
+        .map(|l| hfgi::scene::model::KeyLight { radiance: l.radiance.map(|v| v * k), ..l.clone() })
+        .collect();
+    r.set_environment(&env).unwrap();
+    r.set_key_lights(&keys).unwrap();
+    common::record_frame(&ctx, &mut r);
+    let b = r.read_layers(&ctx).unwrap();
+    r.destroy(&ctx);
+    for (layer, x, y) in
+        [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
+    {
+        assert!(x.iter().flatten().any(|v| *v > 0.0), "{layer} is dark");
+        for (i, (p, q)) in x.iter().flatten().zip(y.iter().flatten()).enumerate() {
+            assert_eq!(p * k as f32, *q, "{layer}[{i}]: {p} × 2^20 ≠ {q}");
+        }
+    }
 }

@@ -18,12 +18,13 @@ struct hfgi_Level {
     float bias;
 };
 
-// Push constants of the pyramid passes (decimate, synthesize, probe). 16 bytes.
+// Push constants of the pyramid passes (decimate, synthesize, probe). 20 bytes.
 struct hfgi_PyramidPush {
     uint level;     // decimate: level written; synthesize: stack levels K | n_v << 16; probe: mode
     uint wrap;      // 1: periodic addressing, 0: clamp to edge
     uint out_width; // working resolution of the stack / probe query count; decimate: levels per channel
     uint out_height;
+    float scale;    // synthesize into an f16 stack: the pre-exposure its values are stored at (hfgi_store.glsl)
 };
 
 // Push constants of the visibility pass (one dispatch per light set). 64 bytes.
@@ -64,7 +65,7 @@ struct hfgi_SweepPush {
     uint pad1;
 };
 
-// Push constants of the direct shading pass. 112 bytes.
+// Push constants of the direct shading pass. 128 bytes.
 struct hfgi_ShadePush {
     uint width;         // full resolution
     uint height;
@@ -78,6 +79,10 @@ struct hfgi_ShadePush {
     uint accumulate;    // indirect mode: 1 adds this bounce to planes 2 and 5, 0 overwrites
     uint sphere_count;  // sphere slots (binding 10: 2 vec4 per slot), for the key lights' shadows
     uint key_overlap;   // 1: key lights shadowed by the exact cap overlap with the spheres
+    float u_scale;      // indirect mode: the pre-exposure U is stored at (hfgi_store.glsl); read as U / u_scale
+    uint pad0;
+    uint pad1;
+    uint pad2;
     vec4 camera;        // world position of the camera (xyz), high part
     vec4 specular;      // Phong k_s (rgb)
     vec4 albedo;        // constant albedo (rgb) when albedo_map == 0
@@ -139,7 +144,7 @@ struct hfgi_IndirectPush {
     uint sample_offset;   // first azimuth of this dispatch (frame::shared::azimuth_chunks)
     uint probes;          // gi.radial_probes
     uint radiance_planes; // radiance stack planes per channel (its finest levels; stack mode)
-    uint pad2;
+    float radiance_scale; // the pre-exposure of the f16 radiance stack and U (hfgi_store.glsl): read / it, store × it
 };
 
 // Push constants of radiance.gather. 32 bytes.

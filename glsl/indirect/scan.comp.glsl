@@ -44,7 +44,11 @@ layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };         
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 #include "hfgi_store.glsl"
-#define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : HFGI_LOAD(hfgi_radiance_stack, i))
+// With f16 the radiance stack holds radiance × pc.radiance_scale (the pre-exposure,
+// frame::storage::pre_exposure): its reads divide by it, and U is stored times it.
+float hfgi_unexpose;
+#define HFGI_RSTACK_AT(i) (HFGI_HALF != 0u ? HFGI_LOAD(hfgi_radiance_stack, i) * hfgi_unexpose : HFGI_LOAD(hfgi_radiance_stack, i))
+#define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : HFGI_RSTACK_AT(i))
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
@@ -149,6 +153,7 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
             uvec4 k = at + (c * pc.radiance_planes + lv) * work.x * work.y; // lv < radiance_planes
             rad[c] = hfgi_bilerp(HFGI_LOAD(hfgi_radiance_stack, k.x), HFGI_LOAD(hfgi_radiance_stack, k.y),
                                  HFGI_LOAD(hfgi_radiance_stack, k.z), HFGI_LOAD(hfgi_radiance_stack, k.w), f);
+            if (HFGI_HALF != 0u) rad[c] *= hfgi_unexpose;
         }
     }
     return rad;
@@ -300,6 +305,7 @@ void main() {
     bool bounded = HFGI_BOUND != 0u && (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
     float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     radiance_begin(scan.work);
+    hfgi_unexpose = 1.0 / pc.radiance_scale;
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;
@@ -334,6 +340,6 @@ void main() {
     const int count = 3 * HFGI_N2;
     uint out_base = (r.y * pc.work_width + r.x) * hfgi_stride(count);
     bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
-#define HFGI_U_AT(i) hfgi_U[(i) / 3][(i) % 3]
+#define HFGI_U_AT(i) (HFGI_HALF != 0u ? hfgi_U[(i) / 3][(i) % 3] * pc.radiance_scale : hfgi_U[(i) / 3][(i) % 3])
     HFGI_STORE(hfgi_u, out_base, count, HFGI_U_AT, acc)
 }

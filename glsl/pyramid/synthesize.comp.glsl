@@ -5,7 +5,8 @@
 // the stack's levels per channel (the finest K of n_v; frame::pyramid::scan_stack_levels).
 // The stack is an array of 32-bit words (hfgi_store.glsl): one float each, or with HFGI_HALF
 // (the radiance stack with gi.storage = "f16") two halves each, written by the invocation of
-// the even value of the pair, which also computes the odd one (planes may have odd sizes).
+// the even value of the pair, which also computes the odd one (planes may have odd sizes), and
+// stores both times the pre-exposure pc.scale (frame::storage::pre_exposure).
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const uint HFGI_HALF = 0u;
@@ -37,6 +38,6 @@ void main() {
         uint zq = q.y < pc.out_height ? z : z + 1u;
         q.y = q.y < pc.out_height ? q.y : 0u;
         float odd = zq < gl_NumWorkGroups.z ? hfgi_synthesized(zq, q) : 0.0; // local_size_z = 1
-        hfgi_stack[i >> 1u] = hfgi_pack_pair(vec2(hfgi_synthesized(z, p), odd), 0u, false);
+        hfgi_stack[i >> 1u] = hfgi_pack_pair(vec2(hfgi_synthesized(z, p), odd) * pc.scale, 0u, false);
     }
 }

@@ -174,6 +174,11 @@ void main() {
                              + w01 * HFGI_LOAD(hfgi_vis, r01 * us + oc) + w11 * HFGI_LOAD(hfgi_vis, r11 * us + oc);
             }
         }
+        // With f16, U is stored times the pre-exposure (frame::storage::pre_exposure).
+        if (HFGI_HALF != 0u) {
+            float unexpose = 1.0 / pc.u_scale;
+            for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] *= unexpose;
+        }
     }
     for (uint s = 0u; s < (HFGI_INDIRECT != 0 ? 0u : pc.set_count); ++s) {
         uint vs = hfgi_stride(HFGI_N2);

@@ -150,7 +150,7 @@ fn scan_push(scene: &Scene, (ww, wh): (u32, u32), sample_count: u32, rad: &Radia
         sample_offset: 0,
         probes: gi.probes(1),
         radiance_planes: rad.pyramid.stack_levels() as u32,
-        pad: 0,
+        radiance_scale: 1.0, // IndirectPass::set_pre_exposure
     }
 }
 
@@ -328,7 +328,7 @@ impl IndirectPass {
         };
         let shade_pipe = pipes.pop().expect("shade");
         let scans = kinds.into_iter().zip(pipes).zip(scan_sets).map(|((b, p), set)| (b, p, set)).collect();
-        Ok(Self {
+        let mut pass = Self {
             radiance: radiance.expect("radiance"),
             max,
             scans,
@@ -341,7 +341,19 @@ impl IndirectPass {
             shade_push: shade.push(),
             n,
             storage: gi.storage,
-        })
+        };
+        pass.set_pre_exposure(super::storage::pre_exposure(scene));
+        Ok(pass)
+    }
+
+    /// Sets the pre-exposure of f16 storage ([`super::storage::pre_exposure`] of the live
+    /// scene): what the radiance stack's synthesis and the scan store is multiplied by it, what
+    /// the scan and the shade read is divided by it. The renderer calls it whenever the lights
+    /// or the material change.
+    pub(crate) fn set_pre_exposure(&mut self, scale: f32) {
+        self.push.radiance_scale = scale;
+        self.shade_push.u_scale = scale;
+        self.radiance.pyramid.set_stack_scale(scale);
     }
 
     /// Records the max pyramid (if the scan uses it), then bounces `1..=bounces`: radiance
@@ -419,7 +431,9 @@ impl IndirectPass {
     pub fn read_u(&self, ctx: &Context) -> Result<Vec<f32>> {
         let values = 3 * self.n * self.n;
         let receivers = (self.push.work_width * self.push.work_height) as usize;
-        super::storage::download_vectors(ctx, &self.buffers[U], self.storage, 0, receivers, values)
+        let u = super::storage::download_vectors(ctx, &self.buffers[U], self.storage, 0, receivers, values)?;
+        let unexpose = 1.0 / self.push.radiance_scale;
+        Ok(u.into_iter().map(|x| x * unexpose).collect())
     }
 
     /// Diagnostics: the radiance the last bounce leaves for the next one in level 0 of the

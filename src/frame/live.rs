@@ -208,6 +208,7 @@ impl Renderer {
         self.live.scene.environment = environment.clone();
         self.queue_lighting();
         self.live.changed(Changes::ENVIRONMENT);
+        self.refresh_pre_exposure();
         Ok(())
     }
 
@@ -244,6 +245,7 @@ impl Renderer {
         }
         self.queue_lighting();
         self.live.changed(Changes::KEY_LIGHTS);
+        self.refresh_pre_exposure();
         Ok(())
     }
 
@@ -270,6 +272,7 @@ impl Renderer {
         self.live.update(dst, offset, bytes);
         self.live.scene.local_lights = next;
         self.live.changed(Changes::LOCAL_LIGHTS);
+        self.refresh_pre_exposure();
         Ok(())
     }
 
@@ -361,6 +364,7 @@ impl Renderer {
             i.update_pushes(|p| p.set_material(material), spec);
         }
         self.live.changed(Changes::MATERIAL);
+        self.refresh_pre_exposure();
         Ok(())
     }
 
@@ -389,6 +393,15 @@ impl Renderer {
             self.live.changed(Changes::CAMERA);
         }
         Ok(())
+    }
+
+    /// The pre-exposure of f16 storage follows the live lights and material
+    /// ([`super::storage::pre_exposure`]; the next recorded bounces use it).
+    fn refresh_pre_exposure(&mut self) {
+        let scale = super::storage::pre_exposure(&self.live.scene);
+        if let Some(i) = self.indirect.as_mut() {
+            i.set_pre_exposure(scale);
+        }
     }
 
     /// The lights, material and camera as last set (the scene given at creation, with its key

@@ -31,6 +31,9 @@ use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
 
+/// The pyramid passes' push-constant bytes (`hfgi_PyramidPush`).
+const PUSH_SIZE: u32 = std::mem::size_of::<PyramidPush>() as u32;
+
 /// Stage names (timestamp scopes and debug labels).
 pub const STAGE_DECIMATE: &str = super::stages::stage_name("pyramid.decimate");
 pub const STAGE_SYNTHESIZE: &str = super::stages::stage_name("pyramid.synthesize");
@@ -189,6 +192,8 @@ pub struct HeightPyramid {
     stack_levels: usize,
     kind: PyramidKind,
     origin: f32,
+    /// The pre-exposure of an f16 stack (its synthesis stores values times it; 1 with f32).
+    stack_scale: f32,
     mode: PyramidMode,
     wrap: bool,
     work: (u32, u32),
@@ -262,7 +267,7 @@ impl HeightPyramid {
                 ctx,
                 &shaders::PYRAMID_DECIMATE_COMP,
                 &[DescriptorKind::StorageBuffer; 2],
-                16,
+                PUSH_SIZE,
                 &[],
                 1,
             )?);
@@ -279,7 +284,7 @@ impl HeightPyramid {
                     ctx,
                     &shaders::PYRAMID_SYNTHESIZE_COMP,
                     &[DescriptorKind::StorageBuffer; 3],
-                    16,
+                    PUSH_SIZE,
                     &[(0, kind.stack_storage.spec())],
                     1,
                 )?);
@@ -293,6 +298,7 @@ impl HeightPyramid {
                 stack_levels: sizes.stack_levels,
                 kind,
                 origin: 0.0,
+                stack_scale: 1.0,
                 mode,
                 wrap,
                 work: (work.0 as u32, work.1 as u32),
@@ -380,7 +386,7 @@ impl HeightPyramid {
             barrier::compute_to_compute(ctx, cmd);
             for i in 1..n {
                 let l = layout.levels[i as usize];
-                let push = PyramidPush { level: i, wrap, out_width: n, out_height: 0 };
+                let push = PyramidPush { level: i, wrap, out_width: n, out_height: 0, scale: 1.0 };
                 self.decimate.dispatch(
                     ctx,
                     cmd,
@@ -408,7 +414,7 @@ impl HeightPyramid {
             rec.scope(self.kind.stage_synthesize, |ctx, cmd| {
                 let (ww, wh) = self.work;
                 let level = n | (self.layout.count() as u32) << 16;
-                let push = PyramidPush { level, wrap, out_width: ww, out_height: wh };
+                let push = PyramidPush { level, wrap, out_width: ww, out_height: wh, scale: self.stack_scale };
                 p.dispatch(
                     ctx,
                     cmd,
@@ -495,7 +501,16 @@ impl HeightPyramid {
     pub fn read_stack_all(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
         let values = self.kind.channels.max(1) as usize * self.stack_levels * (self.work.0 * self.work.1) as usize;
         let storage = self.kind.stack_storage;
-        self.stack.as_ref().map(|s| super::storage::download_vectors(ctx, s, storage, 0, 1, values)).transpose()
+        let read = self.stack.as_ref().map(|s| super::storage::download_vectors(ctx, s, storage, 0, 1, values));
+        let unexpose = 1.0 / self.stack_scale;
+        Ok(read.transpose()?.map(|v| v.into_iter().map(|x| x * unexpose).collect()))
+    }
+
+    /// Sets the pre-exposure of an f16 stack ([`super::storage::pre_exposure`]): the next
+    /// synthesis stores its values times `scale`, and [`HeightPyramid::read_stack_all`] divides
+    /// by it.
+    pub(crate) fn set_stack_scale(&mut self, scale: f32) {
+        self.stack_scale = scale;
     }
 
     /// Samples the pyramid at `(level, x, y)` queries (x, y in level-0 texel units) on the GPU
@@ -527,7 +542,7 @@ impl HeightPyramid {
                 ctx,
                 &shaders::PYRAMID_PROBE_COMP,
                 &[DescriptorKind::StorageBuffer; 5],
-                16,
+                PUSH_SIZE,
                 &[],
                 1,
             )?);
@@ -547,6 +562,7 @@ impl HeightPyramid {
                 wrap: self.wrap as u32,
                 out_width: self.work.0,
                 out_height: self.work.1,
+                scale: 1.0,
             };
             ctx.submit_and_wait(|cmd| {
                 barrier::compute_to_compute(ctx, cmd);

@@ -85,7 +85,8 @@ impl MaxPyramid {
         rec.scope(STAGE_MAX, |ctx, cmd| {
             let (w, h) = self.layout.n0;
             for (level, &(lw, lh, _)) in self.layout.levels.iter().enumerate() {
-                let push = PyramidPush { level: level as u32, wrap: 0, out_width: w as u32, out_height: h as u32 };
+                let push =
+                    PyramidPush { level: level as u32, wrap: 0, out_width: w as u32, out_height: h as u32, scale: 1.0 };
                 let g =
                     [groups(lw as u32, crate::constants::WORKGROUP), groups(lh as u32, crate::constants::WORKGROUP), 1];
                 self.pipeline.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);

@@ -332,6 +332,7 @@ impl ShadePass {
             texel_size: scene.texel_size as f32,
             sphere_count: scene.spheres.len() as u32,
             key_overlap: super::blockers::key_overlap(scene) as u32,
+            u_scale: 1.0,
             ..Default::default()
         };
         push.set_camera(scene.camera.position);

@@ -15,6 +15,9 @@ pub struct PyramidPush {
     pub wrap: u32,
     pub out_width: u32,
     pub out_height: u32,
+    /// Synthesize into an f16 stack: the pre-exposure its values are stored at
+    /// ([`crate::frame::storage::pre_exposure`]); 1 otherwise.
+    pub scale: f32,
 }
 
 /// `HFGI_FLAG_RAW_LEVEL0` (glsl/inc/hfgi_pyramid.glsl): level 0 read as the bilinear surface.
@@ -224,6 +227,10 @@ pub struct ShadePush {
     pub sphere_count: u32,
     /// 1: key lights are shadowed by the exact cap overlap with the spheres (`gi.blocker_key_lights`).
     pub key_overlap: u32,
+    /// Indirect mode: the pre-exposure `U` is stored at ([`crate::frame::storage::pre_exposure`]);
+    /// the shade reads `U / u_scale`. 1 in direct mode.
+    pub u_scale: f32,
+    pub pad: [u32; 3],
     /// Camera position, split as `camera + camera_lo` (two f32 per coordinate, the f64
     /// position to ~48 bits) so that the view vector `(camera − P) + camera_lo` keeps its
     /// precision when the heights are far from 0 (docs/hard-cases.md).
@@ -263,7 +270,9 @@ pub struct IndirectPush {
     /// Radiance stack planes per channel ([`crate::frame::pyramid::HeightPyramid::stack_levels`]):
     /// channel `c` of radiance level `l` is stack plane `c·radiance_planes + l`.
     pub radiance_planes: u32,
-    pub pad: u32,
+    /// The pre-exposure of the f16 radiance stack and `U` ([`crate::frame::storage::pre_exposure`]):
+    /// the scan divides what it reads from the stack by it and multiplies `U` by it when it stores.
+    pub radiance_scale: f32,
 }
 
 /// `hfgi_GatherPush`: push constants of `radiance.gather`.
@@ -378,10 +387,10 @@ pub struct TruthPush {
 const _: () = assert!(std::mem::size_of::<TruthPush>() == 128);
 const _: () = assert!(std::mem::size_of::<GpuLevel>() == 20);
 const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
-const _: () = assert!(std::mem::size_of::<ShadePush>() == 112);
+const _: () = assert!(std::mem::size_of::<ShadePush>() == 128);
 const _: () = assert!(std::mem::size_of::<LocalPush>() == 96);
 const _: () = assert!(std::mem::size_of::<BlockerPush>() == 112);
-const _: () = assert!(std::mem::size_of::<PyramidPush>() == 16);
+const _: () = assert!(std::mem::size_of::<PyramidPush>() == 20);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);
 
 #[cfg(test)]
@@ -439,7 +448,7 @@ mod layout_against_glsl {
 
     #[test]
     fn every_shared_struct_matches_the_glsl_header_field_by_field() {
-        layout!(PyramidPush { level, wrap, out_width, out_height });
+        layout!(PyramidPush { level, wrap, out_width, out_height, scale });
         layout!(VisibilityPush {
             sample_offset,
             sample_count,
@@ -482,6 +491,7 @@ mod layout_against_glsl {
             accumulate,
             sphere_count,
             key_overlap,
+            u_scale,
             camera,
             specular,
             albedo,
@@ -534,7 +544,8 @@ mod layout_against_glsl {
             specular,
             sample_offset,
             probes,
-            radiance_planes
+            radiance_planes,
+            radiance_scale
         });
         layout!(GatherPush { width, height, channel_stride, vector, n2, glossy });
         layout!(ViewPush { view_proj, width, height, texel_size, eye, eye_lo });

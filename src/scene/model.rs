@@ -215,6 +215,8 @@ settings_enum!(
         F32 = "f32",
         /// IEEE half floats, two to a 32-bit word (`packHalf2x16`): half the memory, about
         /// 2⁻¹¹ relative rounding per stored value; the scans and the shading compute in f32.
+        /// `U` and the radiance stack are pre-exposed (`frame::storage::pre_exposure`), so any
+        /// light units fit the half's range. Every preset's default (docs/performance.md §14).
         F16 = "f16",
     }
 );
@@ -387,8 +389,8 @@ pub struct GiSettings {
     pub elevation_basis: ElevationBasis,
     /// Horizons of the environment and key-light visibility: the ladder scan or line sweeps.
     pub visibility: VisibilityMethod,
-    /// Storage of the visibility and IR vectors and the radiance stack (f32, or f16 at half
-    /// their memory).
+    /// Storage of the visibility and IR vectors and the radiance stack (f16 by default, at
+    /// half the memory of f32).
     pub storage: Storage,
     /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
     /// docs/direct.md §7), 0..=64; the sweep lines give the horizon beyond.
@@ -465,7 +467,7 @@ impl GiSettings {
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
             visibility: VisibilityMethod::Ladder,
-            storage: Storage::F32,
+            storage: Storage::F16,
             sweep_near: 16,
             blocker_epsilon: 0.2,
             blocker_ratio: true,

@@ -30,7 +30,7 @@ pub fn key_light(elev_deg: f64, azim_deg: f64, radius_deg: f64, radiance: f64) -
     }
 }
 
-/// A scene over `field` with the sky, one key light and default settings.
+/// A scene over `field` with the sky, one key light and default settings but f32 storage.
 pub fn scene(field: HeightField) -> Scene {
     let (lo, hi) = field.range();
     let camera = Camera::default_for(field.width(), field.height(), 1.0, lo as f64, hi as f64);
@@ -43,7 +43,10 @@ pub fn scene(field: HeightField) -> Scene {
         key_lights: vec![key_light(30.0, 200.0, 5.0, 4.0)],
         local_lights: vec![],
         spheres: vec![],
-        gi: GiSettings::default(),
+        // f32 storage: the tests that use this scene compare the GPU with the f64 twin or with
+        // analytic values at tolerances below a half's rounding (2⁻¹¹); the default f16 storage
+        // is tested against f32 and the exact reference in tests/storage.rs.
+        gi: GiSettings { storage: hfgi::scene::model::Storage::F32, ..GiSettings::default() },
         camera,
         animation: Default::default(),
     }
