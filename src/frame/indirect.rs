@@ -211,6 +211,89 @@ fn scan_chunks(gi: &crate::scene::model::GiSettings, ladder: usize, sets: [(u32,
     })
 }
 
+/// The scan's pipelines of `kinds` (pushed to `pipes`, which owns them on every exit) and their
+/// descriptor sets over `binds`.
+fn scan_pipelines(
+    ctx: &Context,
+    scene: &Scene,
+    n_v: usize,
+    push: &IndirectPush,
+    kinds: &[bool],
+    binds: &[Bind],
+    pipes: &mut Vec<ComputePipeline>,
+) -> Result<Vec<vk::DescriptorSet>> {
+    let mut sets = Vec::new();
+    for &bound in kinds {
+        let spec = scan_spec(scene, n_v, push, bound);
+        let size = std::mem::size_of::<IndirectPush>() as u32;
+        let kinds12 = [DescriptorKind::StorageBuffer; 12];
+        let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds12, size, &spec, 1)?;
+        sets.push(pipes.push_get(scan).allocate_set(ctx, binds)?);
+    }
+    Ok(sets)
+}
+
+/// The indirect shade's pipeline (pushed last to `pipes`) and its descriptor set: `U` in, the
+/// shading planes and the next bounce's radiance level 0 out.
+#[allow(clippy::too_many_arguments)]
+fn shade_set(
+    ctx: &Context,
+    scene: &Scene,
+    pyramid: &HeightPyramid,
+    shade: &ShadePass,
+    u: &Buffer,
+    rad: &RadiancePyramid,
+    blockers: Option<&Buffer>,
+    pipes: &mut Vec<ComputePipeline>,
+) -> Result<vk::DescriptorSet> {
+    let [light, triple, albedo, consts, output] = shade.bindings();
+    let sh = pipes.push_get(shade_pipeline(ctx, scene, rad.pyramid.layout().total as u32)?);
+    sh.allocate_set(
+        ctx,
+        &[
+            Bind::Buffer(pyramid.levels_buffer()),
+            Bind::Buffer(u),
+            Bind::Buffer(light),
+            Bind::Buffer(triple),
+            Bind::Buffer(albedo),
+            Bind::Buffer(consts),
+            Bind::Buffer(output),
+            Bind::Buffer(rad.pyramid.levels_buffer()), // the next bounce's level 0
+            Bind::Buffer(output),                      // T of the direct mode: unused here
+            Bind::Buffer(blockers.unwrap_or(output)),  // unread without spheres
+            Bind::Buffer(output),                      // the spheres: unread by the bounces
+        ],
+    )
+}
+
+/// Bounce `b`'s radiance pyramid over the field, its stack at the working resolution `work`
+/// holding the radiance levels the scan reads.
+fn radiance_pyramid(
+    ctx: &Context,
+    scene: &Scene,
+    work: (usize, usize),
+    levels: &[u32],
+    shade: &ShadePass,
+) -> Result<RadiancePyramid> {
+    let gi = &scene.gi;
+    let n = gi.sh_order;
+    RadiancePyramid::new(
+        ctx,
+        (scene.field.width(), scene.field.height()),
+        work,
+        gi.radiance_level_step,
+        gi.pyramid,
+        scene.wrap,
+        vector_pyramid(scene).then_some((n * n) as u32),
+        (radiance_stack_levels(levels), gi.storage),
+        RadianceInputs {
+            shade: shade.output(),
+            incident_direct: shade.incident(),
+            glossy_planes: super::shade::glossy_planes(scene),
+        },
+    )
+}
+
 const U: usize = 3;
 
 impl IndirectPass {
@@ -225,9 +308,7 @@ impl IndirectPass {
     ) -> Result<Self> {
         let gi = &scene.gi;
         let n = gi.sh_order;
-        let (w, h) = (scene.field.width(), scene.field.height());
         let (ww, wh) = pyramid.work();
-        let vector = vector_pyramid(scene);
         let data = ScanData::new(scene, pyramid.layout().count());
         let levels = data.radiance_levels(scene)?;
         let ScanData { samples, fold, ladder, sets } = data;
@@ -244,21 +325,7 @@ impl IndirectPass {
             for (name, size) in buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len()) {
                 bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
             }
-            let rad = radiance.insert(RadiancePyramid::new(
-                ctx,
-                (w, h),
-                (ww as usize, wh as usize),
-                gi.radiance_level_step,
-                gi.pyramid,
-                scene.wrap,
-                vector.then_some((n * n) as u32),
-                (radiance_stack_levels(&levels), gi.storage),
-                RadianceInputs {
-                    shade: shade.output(),
-                    incident_direct: shade.incident(),
-                    glossy_planes: super::shade::glossy_planes(scene),
-                },
-            )?);
+            let rad = radiance.insert(radiance_pyramid(ctx, scene, (ww as usize, wh as usize), &levels, shade)?);
             let push = scan_push(scene, (ww, wh), sets[0].1, rad);
             let layout = pyramid.layout();
             if has_max {
@@ -268,7 +335,7 @@ impl IndirectPass {
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
             let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
-            let [light, triple, albedo, consts, output] = shade.bindings();
+            let consts = shade.bindings()[3];
             let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
             let binds = [
                 Bind::Buffer(pyramid.levels_buffer()),
@@ -285,31 +352,8 @@ impl IndirectPass {
                 // Without the bound the scan never reads binding 11: any buffer.
                 Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
             ];
-            let mut scan_sets = Vec::new();
-            for &bound in &kinds {
-                let spec = scan_spec(scene, layout.count(), &push, bound);
-                let size = std::mem::size_of::<IndirectPush>() as u32;
-                let kinds12 = [DescriptorKind::StorageBuffer; 12];
-                let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds12, size, &spec, 1)?;
-                scan_sets.push(pipes.push_get(scan).allocate_set(ctx, &binds)?);
-            }
-            let sh = pipes.push_get(shade_pipeline(ctx, scene, rad.pyramid.layout().total as u32)?);
-            let shade_set = sh.allocate_set(
-                ctx,
-                &[
-                    Bind::Buffer(pyramid.levels_buffer()),
-                    Bind::Buffer(&bufs[U]),
-                    Bind::Buffer(light),
-                    Bind::Buffer(triple),
-                    Bind::Buffer(albedo),
-                    Bind::Buffer(consts),
-                    Bind::Buffer(output),
-                    Bind::Buffer(rad.pyramid.levels_buffer()), // the next bounce's level 0
-                    Bind::Buffer(output),                      // T of the direct mode: unused here
-                    Bind::Buffer(blockers.unwrap_or(output)),  // unread without spheres
-                    Bind::Buffer(output),                      // the spheres: unread by the bounces
-                ],
-            )?;
+            let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
+            let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;
             Ok((scan_sets, shade_set, push))
         })();
         let (scan_sets, shade_set, push) = match made {

@@ -44,8 +44,10 @@ const PRE_EXPOSED_LOG2: i32 = 10;
 /// `gi.bounces` (at least 1), with the live lights and material: every incident radiance is at
 /// most `L` = the environment's bound (`Σ |c_lm| · max|Y_lm|`, `max|Y_lm| ≤ √((2l+1)/4π)`) plus
 /// every key and local light's radiance; exit radiance is at most `f·L` with
-/// `f = ρ_max + k_s,max·(e + 2)/2` (irradiance ≤ πL; the normalised Phong lobe's peak is
-/// `(e + 2)/2π`), and bounce `b` at most `f^b·L`.
+/// `f = ρ_max + k_s,max` (diffuse: `ρ/π · E` with `E ≤ πL`; glossy: `k_s` times the incident
+/// radiance weighted by the normalised Phong lobe, whose integral is 1: docs/direct.md §6), and
+/// bounce `b` at most `f^b·L`. SH truncation can overshoot it a little; the pre-exposure
+/// leaves 64× of headroom.
 pub fn radiance_bound(scene: &Scene) -> f64 {
     let max3 = |v: [f64; 3]| v.into_iter().fold(0.0f64, |a, x| a.max(x.abs()));
     let mut env = [0.0f64; 3];
@@ -64,7 +66,7 @@ pub fn radiance_bound(scene: &Scene) -> f64 {
         Albedo::Map(m) => m.iter().fold(0.0f64, |a, v| a.max(f32s(*v))),
     };
     let ks = scene.material.specular.map_or(0.0, f32s);
-    let f = rho + ks * (f64::from(scene.material.exponent) + 2.0) / 2.0;
+    let f = rho + ks;
     (max3(env) + lights) * f.max(f.powi(scene.gi.bounces.max(1) as i32))
 }
 
@@ -148,6 +150,11 @@ mod tests {
         e.environment.sh[2] = [-1.0, 0.0, 0.0];
         let want = 0.8 * (2.0 / (4.0 * std::f64::consts::PI).sqrt() + (3.0 / (4.0 * std::f64::consts::PI)).sqrt());
         assert!((radiance_bound(&e) - want).abs() < 1e-6, "{} vs {want}", radiance_bound(&e));
+        // A glossy surface and two bounces: f = 0.8 + 0.3 > 1, so the second bounce bounds it.
+        let mut g = s.clone();
+        g.material.specular = Some([0.1, 0.3, 0.0]);
+        g.gi.bounces = 2;
+        assert!((radiance_bound(&g) - 3.0 * 1.1 * 1.1).abs() < 1e-6, "{}", radiance_bound(&g));
         // f32 storage and a dark scene: 1.
         let mut f = s.clone();
         f.gi.storage = Storage::F32;
