@@ -279,6 +279,14 @@ fn estimate_512_by_subsample() {
         let mut f32_ = f16.clone();
         f32_[4] = "gi.storage=\"f32\"";
         assert_eq!(r.total(), memory::renderer(&scene_of("", &f16)).unwrap().total());
+        if sub == 1 {
+            // The decimated radiance stack from first principles (docs/pyramid.md): levels 0-7 of
+            // 512² (k_u = 4: 512 … 152 texels) keep 512² planes, 8-11 (128 … 76) 256², 12-15
+            // 128², 16-19 64², 20-22 (16 … 11) 32²; 3 channels of halves.
+            let planes = 8 * 512 * 512 + 4 * 256 * 256 + 4 * 128 * 128 + 4 * 64 * 64 + 3 * 32 * 32;
+            let stack = r.buffers.iter().find(|(b, _)| b == "hfgi.radiance.stack").unwrap().1;
+            assert_eq!(stack, 3 * 2 * planes as u64);
+        }
         assert!(r.total() < memory::renderer(&scene_of("", &f32_)).unwrap().total());
         let largest = r.largest().unwrap();
         println!(

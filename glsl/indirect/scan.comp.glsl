@@ -41,6 +41,9 @@ layout(std430, binding = 10) readonly buffer Consts {                         //
     uint hfgi_triple_count;
 };
 layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };           // pyramid.max (with the bound)
+// The radiance stack's planes (stack mode): width, height, offset per level of channel 0, then
+// the channel stride (PyramidLayout::stack_planes: coarse planes are smaller than the working grid).
+layout(std430, binding = 12) readonly buffer RPlanes { uvec4 hfgi_rplanes[]; };
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 #include "hfgi_store.glsl"
@@ -58,10 +61,10 @@ float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_N2];
 uint hfgi_max_ov[HFGI_MAX_LEVELS]; // offsets of the ov levels (hfgi_max.glsl)
 uint hfgi_max_levels;
-// Radiance level 0, read once per receiver (radiance_begin): its size, the scales from level-0
-// height positions to its texels and to the working grid, and its channels' offsets and biases.
+// Radiance level 0, read once per receiver (radiance_begin): its size, the scale from level-0
+// height positions to its texels, and its channels' offsets and biases.
 ivec2 hfgi_r0_size;
-vec2 hfgi_r0_raw_scale, hfgi_r0_stack_scale;
+vec2 hfgi_r0_raw_scale;
 uvec3 hfgi_r0_offset;
 vec3 hfgi_r0_bias;
 
@@ -70,7 +73,6 @@ void radiance_begin(uvec2 work) {
     vec2 n0 = vec2(float(r0.width), float(r0.height));
     hfgi_r0_size = ivec2(int(r0.width), int(r0.height));
     hfgi_r0_raw_scale = vec2(hfgi_r0_size) / n0;
-    hfgi_r0_stack_scale = vec2(work) / n0;
     for (uint c = 0u; c < 3u; ++c) {
         hfgi_Level l = hfgi_radiance_table[c * pc.radiance_levels];
         hfgi_r0_offset[c] = l.offset;
@@ -135,8 +137,9 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
         }
         return rad;
     }
-    ivec2 size = raw ? hfgi_r0_size : ivec2(work);
-    vec2 pw = (q + 0.5) * (raw ? hfgi_r0_raw_scale : hfgi_r0_stack_scale) - 0.5;
+    uvec4 plane = raw ? uvec4(0u) : hfgi_rplanes[lv];
+    ivec2 size = raw ? hfgi_r0_size : ivec2(plane.xy);
+    vec2 pw = (q + 0.5) * (raw ? hfgi_r0_raw_scale : vec2(plane.xy) / vec2(hfgi_r0_size)) - 0.5;
     vec2 fl = floor(pw);
     vec2 f = pw - fl;
     ivec2 i = ivec2(fl);
@@ -150,7 +153,7 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
             rad[c] = hfgi_bilerp(hfgi_radiance_levels[k.x] - b, hfgi_radiance_levels[k.y] - b,
                                  hfgi_radiance_levels[k.z] - b, hfgi_radiance_levels[k.w] - b, f);
         } else {
-            uvec4 k = at + (c * pc.radiance_planes + lv) * work.x * work.y; // lv < radiance_planes
+            uvec4 k = at + c * hfgi_rplanes[pc.radiance_planes].z + plane.z; // lv < radiance_planes
             rad[c] = hfgi_bilerp(HFGI_LOAD(hfgi_radiance_stack, k.x), HFGI_LOAD(hfgi_radiance_stack, k.y),
                                  HFGI_LOAD(hfgi_radiance_stack, k.z), HFGI_LOAD(hfgi_radiance_stack, k.w), f);
             if (HFGI_HALF != 0u) rad[c] *= hfgi_unexpose;

@@ -226,8 +226,8 @@ fn scan_pipelines(
     for &bound in kinds {
         let spec = scan_spec(scene, n_v, push, bound);
         let size = std::mem::size_of::<IndirectPush>() as u32;
-        let kinds12 = [DescriptorKind::StorageBuffer; 12];
-        let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds12, size, &spec, 1)?;
+        let kinds = [DescriptorKind::StorageBuffer; 13];
+        let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds, size, &spec, 1)?;
         sets.push(pipes.push_get(scan).allocate_set(ctx, binds)?);
     }
     Ok(sets)
@@ -351,6 +351,8 @@ impl IndirectPass {
                 Bind::Buffer(consts),
                 // Without the bound the scan never reads binding 11: any buffer.
                 Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
+                // Pyramid mode has no stack and no planes: any buffer.
+                Bind::Buffer(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
             ];
             let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
             let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;

@@ -52,6 +52,10 @@ pub struct PyramidKind {
     /// How the stack stores its values (the radiance stack follows `gi.storage`; the height
     /// stack is always f32: heights need more than a half's 11 bits).
     pub stack_storage: Storage,
+    /// Stack planes at twice their level's resolution instead of the working one
+    /// (`PyramidLayout::stack_plane_size`): the radiance stack, read once per casting point.
+    /// The height stack, read at every scan sample, keeps one plane size.
+    pub decimated_stack: bool,
 }
 
 impl PyramidKind {
@@ -63,6 +67,7 @@ impl PyramidKind {
         stage_synthesize: STAGE_SYNTHESIZE,
         label: "pyramid",
         stack_storage: Storage::F32,
+        decimated_stack: false,
     };
 }
 
@@ -115,8 +120,12 @@ pub(crate) struct PyramidBuffers {
     pub levels: u64,
     /// `hfgi.{label}.table`: one [`GpuLevel`] per channel and level.
     pub table: u64,
-    /// `hfgi.{label}.stack`: stack mode only, `channels · stack_levels` planes of `work`, `f32`.
+    /// `hfgi.{label}.stack`: stack mode only, `channels · stack_levels` planes of `work` (or
+    /// smaller, [`PyramidKind::decimated_stack`]) in the kind's storage.
     pub stack: Option<u64>,
+    /// `hfgi.{label}.planes`: stack mode only, the planes' sizes and offsets
+    /// (`PyramidLayout::stack_planes`, `uvec4` each) that the synthesis and the scan read.
+    pub planes: Option<Vec<[u32; 4]>>,
     /// Stack planes per channel: the finest levels kept (`1..=n_v`).
     pub stack_levels: usize,
 }
@@ -157,8 +166,13 @@ impl PyramidBuffers {
                 format!("2×2 up to {width}×{height}"),
             ));
         }
-        let plane = (work.0 * work.1) as u64;
-        let stack_floats = plane * stack_levels as u64 * channels;
+        let planes = layout.stack_planes(work, stack_levels, kind.decimated_stack);
+        // The channel stride of `planes` in u64 (its u32 offsets are exact when the check passes).
+        let per_channel: u64 = (0..stack_levels)
+            .map(|i| layout.stack_plane_size(i, work, kind.decimated_stack))
+            .map(|(w, h)| if kind.decimated_stack { ((w * h) as u64).div_ceil(2) * 2 } else { (w * h) as u64 })
+            .sum();
+        let stack_floats = per_channel * channels;
         if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
             return Err(Error::param(
                 "gi.pyramid",
@@ -170,6 +184,7 @@ impl PyramidBuffers {
             levels: layout.total * 4 * channels,
             table: (table_len * std::mem::size_of::<GpuLevel>()) as u64,
             stack: (mode == PyramidMode::Stack).then_some(kind.stack_storage.bytes(stack_floats)),
+            planes: (mode == PyramidMode::Stack).then_some(planes),
             stack_levels,
             layout,
         })
@@ -179,6 +194,7 @@ impl PyramidBuffers {
     pub(crate) fn named(&self, kind: PyramidKind) -> Vec<(String, u64)> {
         let mut out = vec![(buffer_name(kind, "levels"), self.levels), (buffer_name(kind, "table"), self.table)];
         out.extend(self.stack.map(|b| (buffer_name(kind, "stack"), b)));
+        out.extend(self.planes.as_ref().map(|p| (buffer_name(kind, "planes"), (p.len() * 16) as u64)));
         out
     }
 }
@@ -200,6 +216,10 @@ pub struct HeightPyramid {
     levels: Buffer,
     table: Buffer,
     stack: Option<Buffer>,
+    /// The stack planes' table (`PyramidBuffers::planes`), with the stack.
+    planes: Option<Buffer>,
+    /// Its entries: `[width, height, offset, 0]` per plane, then the channel stride.
+    plane_table: Vec<[u32; 4]>,
     decimate: ComputePipeline,
     synthesize: Option<ComputePipeline>,
     decimate_set: vk::DescriptorSet,
@@ -244,7 +264,7 @@ impl HeightPyramid {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
-        let (mut levels, mut table, mut stack) = (None, None, None);
+        let (mut levels, mut table, mut stack, mut planes) = (None, None, None, None);
         let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
         let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
         let made = (|| -> Result<()> {
@@ -280,15 +300,26 @@ impl HeightPyramid {
                     storage,
                     MemoryLocation::GpuOnly,
                 )?);
+                let entries = sizes.planes.as_deref().unwrap_or_default();
+                let name = buffer_name(kind, "planes");
+                let pl = planes.insert(Buffer::new(
+                    ctx,
+                    &name,
+                    (entries.len() * 16) as u64,
+                    storage,
+                    MemoryLocation::GpuOnly,
+                )?);
+                memory::upload(ctx, pl, 0, bytemuck::cast_slice(entries))?;
                 let p = synthesize.insert(ComputePipeline::new(
                     ctx,
                     &shaders::PYRAMID_SYNTHESIZE_COMP,
-                    &[DescriptorKind::StorageBuffer; 3],
+                    &[DescriptorKind::StorageBuffer; 4],
                     PUSH_SIZE,
                     &[(0, kind.stack_storage.spec())],
                     1,
                 )?);
-                sets.1 = p.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb), Bind::Buffer(st)])?;
+                let binds = [Bind::Buffer(lv), Bind::Buffer(tb), Bind::Buffer(st), Bind::Buffer(pl)];
+                sets.1 = p.allocate_set(ctx, &binds)?;
             }
             Ok(())
         })();
@@ -305,13 +336,15 @@ impl HeightPyramid {
                 levels,
                 table,
                 stack,
+                planes,
+                plane_table: sizes.planes.unwrap_or_default(),
                 decimate,
                 synthesize,
                 decimate_set: sets.0,
                 synthesize_set: sets.1,
             }),
             (made, levels, table, decimate) => {
-                for b in [levels, table, stack].into_iter().flatten() {
+                for b in [levels, table, stack, planes].into_iter().flatten() {
                     b.destroy(ctx);
                 }
                 for mut p in [decimate, synthesize].into_iter().flatten() {
@@ -454,6 +487,13 @@ impl HeightPyramid {
     pub fn stack_buffer(&self) -> Option<&Buffer> {
         self.stack.as_ref()
     }
+
+    /// The stack planes' table (`[width, height, offset, 0]` per plane of channel 0, offsets in
+    /// values, then `[0, 0, channel stride, 0]`; `PyramidLayout::stack_planes`); stack mode only.
+    pub fn stack_planes_buffer(&self) -> Option<&Buffer> {
+        self.planes.as_ref()
+    }
+
     /// Stack planes per channel: the finest levels the stack holds (`n_v` unless created with
     /// fewer; [`HeightPyramid::with_kind`]).
     pub fn stack_levels(&self) -> usize {
@@ -462,7 +502,10 @@ impl HeightPyramid {
 
     /// Bytes of GPU memory held by this mode's buffers.
     pub fn memory_bytes(&self) -> u64 {
-        self.levels.size + self.table.size + self.stack.as_ref().map_or(0, |s| s.size)
+        self.levels.size
+            + self.table.size
+            + self.stack.as_ref().map_or(0, |s| s.size)
+            + self.planes.as_ref().map_or(0, |s| s.size)
     }
 
     /// Reads level `i` back (waits). For tests and pictures. Level 0 holds what was written
@@ -486,8 +529,8 @@ impl HeightPyramid {
                 format!("< {} (the levels the stack holds)", self.stack_levels),
             ));
         }
-        let plane = (self.work.0 * self.work.1) as u64;
-        memory::download_f32(ctx, s, i as u64 * plane, plane)
+        let [w, h, offset, _] = self.plane_table[i];
+        memory::download_f32(ctx, s, u64::from(offset), u64::from(w) * u64::from(h))
     }
 
     /// Diagnostics: the whole levels buffer (every channel, [`PyramidLayout`] order; channel
@@ -496,10 +539,12 @@ impl HeightPyramid {
         memory::download_f32(ctx, &self.levels, 0, self.levels.size / 4)
     }
 
-    /// Diagnostics: the whole stack buffer (`channels · stack_levels()` planes of `work()` size), read back
-    /// (waits); `None` in pyramid mode. Call after a recorded frame completed.
+    /// Diagnostics: the whole stack buffer (`channels · stack_levels()` planes laid out as
+    /// [`HeightPyramid::stack_planes_buffer`] says, padding included), read back (waits); `None`
+    /// in pyramid mode. Call after a recorded frame completed.
     pub fn read_stack_all(&self, ctx: &Context) -> Result<Option<Vec<f32>>> {
-        let values = self.kind.channels.max(1) as usize * self.stack_levels * (self.work.0 * self.work.1) as usize;
+        let stride = self.plane_table.last().map_or(0, |p| p[2] as usize);
+        let values = self.kind.channels.max(1) as usize * stride;
         let storage = self.kind.stack_storage;
         let read = self.stack.as_ref().map(|s| super::storage::download_vectors(ctx, s, storage, 0, 1, values));
         let unexpose = 1.0 / self.stack_scale;
@@ -518,6 +563,9 @@ impl HeightPyramid {
     /// values are relative to [`HeightPyramid::origin`] (absolute with the default origin 0).
     /// In stack mode a query's level must be one the stack holds (`< stack_levels()`).
     pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
+        if self.kind.decimated_stack && self.stack.is_some() {
+            return Err(Error::param("probe", "a decimated stack", "the height stack or pyramid mode"));
+        }
         let top = if self.stack.is_some() { self.stack_levels } else { self.layout.count() };
         if let Some(q) = queries.iter().find(|q| !(q[0] >= 0.0 && (q[0] as usize) < top)) {
             return Err(Error::param("probe level", q[0], format!("0 ≤ level < {top}")));
@@ -593,8 +641,8 @@ impl HeightPyramid {
         }
         self.levels.destroy(ctx);
         self.table.destroy(ctx);
-        if let Some(s) = self.stack {
-            s.destroy(ctx);
+        for b in [self.stack, self.planes].into_iter().flatten() {
+            b.destroy(ctx);
         }
     }
 }

@@ -75,4 +75,72 @@ impl PyramidLayout {
     pub fn tau(&self, i: usize) -> f64 {
         2f64.powf(-((self.count() - 1 - i) as f64) / self.k_v as f64)
     }
+
+    /// The size of stack plane `i` (level `i` resampled for the scans, docs/pyramid.md "Storage
+    /// modes"): the working resolution `work`; with `decimated`, `work` halved `j` times, the
+    /// largest `j` that keeps at least twice level `i`'s texels along both axes (a coarse
+    /// level's cubic B-spline needs no finer grid for a bilinear read).
+    pub fn stack_plane_size(&self, i: usize, work: (usize, usize), decimated: bool) -> (usize, usize) {
+        let l = self.levels[i];
+        let fits = |j: u32| (work.0 >> j) >= 2 * l.width as usize && (work.1 >> j) >= 2 * l.height as usize;
+        let j = if decimated { (1..31).take_while(|&j| fits(j)).last().unwrap_or(0) } else { 0 };
+        (work.0 >> j, work.1 >> j)
+    }
+
+    /// The stack's first `planes` planes per channel: `[width, height, offset, 0]` each, offsets
+    /// in values from the channel's start, then `[0, 0, stride, 0]` with the channel stride. A
+    /// decimated stack pads every plane to an even count (two f16 values per 32-bit word never
+    /// straddle planes); a full one is `planes` planes of `work`, unpadded.
+    pub fn stack_planes(&self, work: (usize, usize), planes: usize, decimated: bool) -> Vec<[u32; 4]> {
+        let mut out = Vec::with_capacity(planes + 1);
+        let mut offset = 0u64;
+        for i in 0..planes {
+            let (w, h) = self.stack_plane_size(i, work, decimated);
+            out.push([w as u32, h as u32, offset as u32, 0]);
+            let count = (w * h) as u64;
+            offset += if decimated { count.div_ceil(2) * 2 } else { count };
+        }
+        out.push([0, 0, offset as u32, 0]);
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Decimated planes: the working grid halved while both axes keep ≥ 2× the level's texels,
+    /// not once more; full planes: the working grid; the table's offsets are the padded sums.
+    #[test]
+    fn stack_planes_keep_twice_their_levels_resolution() {
+        for (w, h, work, k) in
+            [(512, 512, (512, 512), 4), (128, 88, (128, 88), 4), (128, 88, (64, 44), 4), (37, 29, (37, 29), 8)]
+        {
+            let layout = PyramidLayout::new(w, h, k).unwrap();
+            for i in 0..layout.count() {
+                let l = layout.levels[i];
+                let (pw, ph) = layout.stack_plane_size(i, work, true);
+                assert_eq!(layout.stack_plane_size(i, work, false), work);
+                let j = (0..31).find(|&j| (work.0 >> j, work.1 >> j) == (pw, ph));
+                let j = j.unwrap_or_else(|| panic!("{w}×{h} level {i}: {pw}×{ph} is no power-of-two reduction"));
+                let twice = |a: usize, b: usize| a >= 2 * l.width as usize && b >= 2 * l.height as usize;
+                assert!(j == 0 || twice(pw, ph), "{w}×{h} level {i}: {pw}×{ph} below 2× {}×{}", l.width, l.height);
+                assert!(!twice(work.0 >> (j + 1), work.1 >> (j + 1)), "{w}×{h} level {i}: {pw}×{ph} could be halved");
+            }
+            let planes = layout.stack_planes(work, layout.count(), true);
+            let mut offset = 0;
+            for (i, p) in planes[..layout.count()].iter().enumerate() {
+                let (pw, ph) = layout.stack_plane_size(i, work, true);
+                assert_eq!(*p, [pw as u32, ph as u32, offset, 0]);
+                offset += ((pw * ph) as u32).div_ceil(2) * 2;
+            }
+            assert_eq!(planes[layout.count()], [0, 0, offset, 0]);
+            let full = layout.stack_planes(work, 3, false);
+            assert_eq!(full[3][2] as usize, 3 * work.0 * work.1);
+        }
+        // 512², k = 4: 8 planes at 512², then 4 at 256², 4 at 128² …
+        let layout = PyramidLayout::new(512, 512, 4).unwrap();
+        let sizes: Vec<usize> = (0..13).map(|i| layout.stack_plane_size(i, (512, 512), true).0).collect();
+        assert_eq!(sizes, [512, 512, 512, 512, 512, 512, 512, 512, 256, 256, 256, 256, 128]);
+    }
 }
