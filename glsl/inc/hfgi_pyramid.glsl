@@ -6,8 +6,9 @@
 #define HFGI_PYRAMID_GLSL
 #include "hfgi_filter.glsl"
 
-// Stack planes: `source` as in hfgi_Level. A shader reading two stacks defines
-//     #define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : hfgi_radiance_stack[i])
+// Stack planes of the working grid: `source` as in hfgi_Level. A shader reading two such stacks
+// would define HFGI_STACK_READ(source, i) to pick the buffer; the radiance stack's decimated
+// planes are not such a stack (glsl/indirect/scan.comp.glsl reads them through their table).
 #ifndef HFGI_STACK_READ
 #define HFGI_STACK_READ(source, i) hfgi_stack[i]
 #endif

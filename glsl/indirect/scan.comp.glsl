@@ -50,8 +50,8 @@ layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 // With f16 the radiance stack holds radiance × pc.radiance_scale (the pre-exposure,
 // frame::storage::pre_exposure): its reads divide by it, and U is stored times it.
 float hfgi_unexpose;
-#define HFGI_RSTACK_AT(i) (HFGI_HALF != 0u ? HFGI_LOAD(hfgi_radiance_stack, i) * hfgi_unexpose : HFGI_LOAD(hfgi_radiance_stack, i))
-#define HFGI_STACK_READ(source, i) ((source) == 0u ? hfgi_stack[i] : HFGI_RSTACK_AT(i))
+// hfgi_pyramid.glsl's stack reads (HFGI_STACK_READ: hfgi_stack) are the height stack's: the
+// radiance stack's planes have their own sizes (binding 12), and radiance_rgb reads them itself.
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
@@ -68,7 +68,7 @@ vec2 hfgi_r0_raw_scale;
 uvec3 hfgi_r0_offset;
 vec3 hfgi_r0_bias;
 
-void radiance_begin(uvec2 work) {
+void radiance_begin() {
     hfgi_Level r0 = hfgi_radiance_table[0];
     vec2 n0 = vec2(float(r0.width), float(r0.height));
     hfgi_r0_size = ivec2(int(r0.width), int(r0.height));
@@ -307,7 +307,7 @@ void main() {
     }
     bool bounded = HFGI_BOUND != 0u && (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
     float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
-    radiance_begin(scan.work);
+    radiance_begin();
     hfgi_unexpose = 1.0 / pc.radiance_scale;
     for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
