@@ -42,6 +42,10 @@ void main() {
     uint i = (z / kept) * hfgi_planes[kept].z + plane.z + t;
     if (HFGI_HALF == 0u) {
         hfgi_stack[i] = floatBitsToUint(hfgi_synthesized(z, p, size));
+        // A decimated plane of odd count is padded by one value: 0, so the buffer's contents
+        // are defined (read-backs see every value; the scan never reads the pad).
+        uint count = size.x * size.y;
+        if (t + 1u == count && plane.z + count < hfgi_planes[z % kept + 1u].z) hfgi_stack[i + 1u] = 0u;
     } else if ((i & 1u) == 0u) {
         // Value i + 1: the next texel of the row, else the first of the next row, else padding.
         uvec2 q = p.x + 1u < size.x ? uvec2(p.x + 1u, p.y) : uvec2(0u, p.y + 1u);
