@@ -29,6 +29,14 @@ fn with_storage(s: &Scene, storage: Storage) -> Scene {
     s
 }
 
+/// One layer of two renders: its name, the first's, the second's.
+type LayerPair<'a> = (&'static str, &'a Vec<[f32; 3]>, &'a Vec<[f32; 3]>);
+
+/// The direct, indirect and total layers of two renders, by name.
+fn layer_pairs<'a>(a: &'a hfgi::frame::ShadingLayers, b: &'a hfgi::frame::ShadingLayers) -> [LayerPair<'a>; 3] {
+    [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
+}
+
 /// A layer in f64, as `rel_l2` takes its reference.
 fn to64(v: &[[f32; 3]]) -> Vec<[f64; 3]> {
     v.iter().map(|p| p.map(f64::from)).collect()
@@ -170,9 +178,7 @@ fn f16_is_pre_exposed_so_physical_units_keep_their_precision() {
     s.key_lights = vec![key_light(40.0, 30.0, 0.27, 1e11)];
     let a = render_layers(&ctx, &with_storage(&s, Storage::F32));
     let b = render_layers(&ctx, &with_storage(&s, Storage::F16));
-    for (layer, x, y) in
-        [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
-    {
+    for (layer, x, y) in layer_pairs(&a, &b) {
         assert!(y.iter().flatten().all(|v| v.is_finite()), "f16 {layer} is not finite");
         let e = rel_l2(y, &to64(x));
         assert!(e <= 1e-3, "{layer}: f16 vs f32 {e:e}");
@@ -207,9 +213,7 @@ fn f16_pre_exposure_follows_the_live_lights_exactly() {
     common::record_frame(&ctx, &mut r);
     let b = r.read_layers(&ctx).unwrap();
     r.destroy(&ctx);
-    for (layer, x, y) in
-        [("direct", &a.direct, &b.direct), ("indirect", &a.indirect, &b.indirect), ("total", &a.total, &b.total)]
-    {
+    for (layer, x, y) in layer_pairs(&a, &b) {
         assert!(x.iter().flatten().any(|v| *v > 0.0), "{layer} is dark");
         for (i, (p, q)) in x.iter().flatten().zip(y.iter().flatten()).enumerate() {
             assert_eq!(p * k as f32, *q, "{layer}[{i}]: {p} × 2^20 ≠ {q}");

@@ -167,12 +167,7 @@ impl PyramidBuffers {
             ));
         }
         let planes = layout.stack_planes(work, stack_levels, kind.decimated_stack);
-        // The channel stride of `planes` in u64 (its u32 offsets are exact when the check passes).
-        let per_channel: u64 = (0..stack_levels)
-            .map(|i| layout.stack_plane_size(i, work, kind.decimated_stack))
-            .map(|(w, h)| if kind.decimated_stack { ((w * h) as u64).div_ceil(2) * 2 } else { (w * h) as u64 })
-            .sum();
-        let stack_floats = per_channel * channels;
+        let stack_floats = layout.stack_values(work, stack_levels, kind.decimated_stack) * channels;
         if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
             return Err(Error::param(
                 "gi.pyramid",

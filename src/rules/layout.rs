@@ -97,11 +97,27 @@ impl PyramidLayout {
         for i in 0..planes {
             let (w, h) = self.stack_plane_size(i, work, decimated);
             out.push([w as u32, h as u32, offset as u32, 0]);
-            let count = (w * h) as u64;
-            offset += if decimated { count.div_ceil(2) * 2 } else { count };
+            offset += self.stack_plane_values(i, work, decimated);
         }
         out.push([0, 0, offset as u32, 0]);
         out
+    }
+
+    /// The values stack plane `i` occupies: its texels, padded to an even count when decimated.
+    fn stack_plane_values(&self, i: usize, work: (usize, usize), decimated: bool) -> u64 {
+        let (w, h) = self.stack_plane_size(i, work, decimated);
+        let count = (w * h) as u64;
+        if decimated {
+            count.div_ceil(2) * 2
+        } else {
+            count
+        }
+    }
+
+    /// The channel stride of [`PyramidLayout::stack_planes`] in u64 (its `u32` offsets are exact
+    /// while the whole stack holds fewer than 2³² values).
+    pub fn stack_values(&self, work: (usize, usize), planes: usize, decimated: bool) -> u64 {
+        (0..planes).map(|i| self.stack_plane_values(i, work, decimated)).sum()
     }
 }
 
