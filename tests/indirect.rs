@@ -425,3 +425,41 @@ fn the_indirect_shade_writes_the_next_bounces_level_0() {
         assert!(max_glossy > 1e-3, "the glossy light must be there to tell the two apart: {max_glossy}");
     }
 }
+
+/// A diffuse surface's `U` keeps only the bands its clamped-cosine lobe does not zero
+/// (`rules::scene::u_bands`; order 4: bands 0–2, order 6: bands 0–4) and shades the same as the
+/// full `U`. The full one comes from the same scene with a zero specular colour, which keeps
+/// every band (the Phong lobe reads them) but adds no light: every layer agrees within 1e-6
+/// (relative L2), and the kept coefficients are the full vector's first ones.
+#[test]
+fn diffuse_u_keeps_the_bands_the_clamped_cosine_reads() {
+    let ctx = gpu();
+    for (n, kept, storage) in [(4usize, 3usize, "f32"), (4, 3, "f16"), (6, 5, "f32")] {
+        let mut s = scene(rough_field(37, 29, 11));
+        s.gi.sh_order = n;
+        s.gi.azimuths = 8;
+        s.gi.bounces = 2;
+        s.gi.storage =
+            if storage == "f16" { hfgi::scene::model::Storage::F16 } else { hfgi::scene::model::Storage::F32 };
+        let mut full = s.clone();
+        full.material.specular = Some([0.0; 3]);
+        assert_eq!((hfgi::rules::scene::u_bands(&s), hfgi::rules::scene::u_bands(&full)), (kept, n));
+        let (a, b) = (debug_buffers(&ctx, &s), debug_buffers(&ctx, &full));
+        let (ua, ub) = (find_buffer(&a, "indirect.u"), find_buffer(&b, "indirect.u"));
+        let receivers = 37 * 29;
+        assert_eq!((ua.len(), ub.len()), (receivers * 3 * kept * kept, receivers * 3 * n * n), "n = {n}");
+        for r in 0..receivers {
+            let (x, y) = (&ua[r * 3 * kept * kept..][..3 * kept * kept], &ub[r * 3 * n * n..][..3 * kept * kept]);
+            assert_eq!(x, y, "n = {n}, {storage}: receiver {r}'s kept coefficients");
+        }
+        let (la, _) = render_gpu(&ctx, &s);
+        let (lb, _) = render_gpu(&ctx, &full);
+        for (layer, x, y) in [("indirect", &la.indirect, &lb.indirect), ("total", &la.total, &lb.total)] {
+            let y64: Vec<[f64; 3]> = y.iter().map(|p| p.map(f64::from)).collect();
+            let e = rel_l2(x, &y64);
+            assert!(e <= 1e-6, "n = {n}, {storage}: {layer} {e:e}");
+            assert!(x.iter().any(|p| p[0] > 1e-4), "n = {n}: {layer} is empty");
+        }
+    }
+    assert!(common::finish(ctx).is_empty());
+}

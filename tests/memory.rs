@@ -180,8 +180,9 @@ fn estimate_equals_what_the_passes_allocate() {
     assert!(messages.is_empty(), "validation messages: {messages:?}");
 }
 
-/// The bytes of `V` and `U` from first principles: receivers × n² values (× 3 for U's rgb) of 4
-/// bytes (f32) or 2 bytes with each receiver padded to an even count (f16); the radiance stack
+/// The bytes of `V` and `U` from first principles: receivers × n² values (V) or 3 × 9 (U of the
+/// default diffuse surface: bands 0–2) of 4 bytes (f32) or 2 bytes with each receiver padded to
+/// an even count (f16); the radiance stack
 /// halves (rounded up to a whole word), and nothing else changes.
 #[test]
 fn f16_storage_halves_v_u_and_the_radiance_stack() {
@@ -206,9 +207,12 @@ fn f16_storage_halves_v_u_and_the_radiance_stack() {
         let (v16, u16_, r16, t16) = bytes("f16", n as usize);
         let pad = |x: u64| x.div_ceil(2) * 2;
         assert_eq!(v32, sets * receivers * n * n * 4, "n = {n}");
-        assert_eq!(u32_, receivers * 3 * n * n * 4, "n = {n}");
+        // A diffuse surface's U keeps bands 0–2 (rules::scene::u_bands: order 4's band 3 is
+        // zeroed by the clamped cosine): 9 coefficients for n = 3 and n = 4.
+        let u = 9;
+        assert_eq!(u32_, receivers * 3 * u * 4, "n = {n}");
         assert_eq!(v16, sets * receivers * pad(n * n) * 2, "n = {n}");
-        assert_eq!(u16_, receivers * pad(3 * n * n) * 2, "n = {n}");
+        assert_eq!(u16_, receivers * pad(3 * u) * 2, "n = {n}");
         assert_eq!(r16, (r32 / 4).div_ceil(2) * 4, "n = {n}: radiance stack");
         assert_eq!(t32 - t16, (v32 - v16) + (u32_ - u16_) + (r32 - r16), "n = {n}: nothing else changes");
     }

@@ -22,6 +22,9 @@ layout(constant_id = 8) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_
 // 0: the pipeline of bounces without the max-pyramid bound: its code is compiled out, not just
 // skipped (lavapipe runs a skipped branch on every lane; docs/performance.md §12).
 layout(constant_id = 9) const uint HFGI_BOUND = 1u;
+// Coefficients of U stored and so accumulated (rules::scene::u_bands²): n², or only the bands a
+// diffuse surface's clamped-cosine lobe does not zero (order 4: 9), docs/indirect.md §4.
+layout(constant_id = 10) const int HFGI_NU = 16;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
@@ -58,7 +61,7 @@ float hfgi_unexpose;
 #include "hfgi_max.glsl"
 
 float hfgi_base[HFGI_NV];
-vec3 hfgi_U[HFGI_N2];
+vec3 hfgi_U[HFGI_NU];
 uint hfgi_max_ov[HFGI_MAX_LEVELS]; // offsets of the ov levels (hfgi_max.glsl)
 uint hfgi_max_levels;
 // Radiance level 0, read once per receiver (radiance_begin): its size, the scale from level-0
@@ -309,7 +312,7 @@ void main() {
     float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     radiance_begin();
     hfgi_unexpose = 1.0 / pc.radiance_scale;
-    for (int k = 0; k < HFGI_N2; ++k) hfgi_U[k] = vec3(0.0);
+    for (int k = 0; k < HFGI_NU; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
         vec2 d = hfgi_samples[j].xy;
         // ω_min: the tangent plane of the receiver along φ (§3): the paper's −asin(N·d), or the
@@ -330,17 +333,17 @@ void main() {
             running = limit;
         }
         scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
-        // eq. 19–21 folded: U += A_j u_j.
+        // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows).
         uint base = j * uint(HFGI_N2 * HFGI_NE);
-        for (int k = 0; k < HFGI_N2; ++k) {
+        for (int k = 0; k < HFGI_NU; ++k) {
             vec3 acc = vec3(0.0);
             for (int l = 0; l < HFGI_NE; ++l) acc += hfgi_fold[base + uint(k * HFGI_NE + l)] * u[l];
             hfgi_U[k] += acc;
         }
     }
     // Value 3k + c of the receiver's vector is channel c of coefficient k; the receiver stride is
-    // 3n², rounded up to even with f16 (Storage::stride).
-    const int count = 3 * HFGI_N2;
+    // 3·HFGI_NU, rounded up to even with f16 (Storage::stride).
+    const int count = 3 * HFGI_NU;
     uint out_base = (r.y * pc.work_width + r.x) * hfgi_stride(count);
     bool acc = (pc.flags & HFGI_FLAG_ACCUMULATE) != 0u;
 #define HFGI_U_AT(i) (HFGI_HALF != 0u ? hfgi_U[(i) / 3][(i) % 3] * pc.radiance_scale : hfgi_U[(i) / 3][(i) % 3])

@@ -28,6 +28,9 @@ layout(constant_id = 3) const uint HFGI_BLOCKERS = 0u;
 layout(constant_id = 4) const uint HFGI_HALF = 0u; // gi.storage of binding 1: 1 = f16 (hfgi_store.glsl)
 layout(constant_id = 5) const int HFGI_GLOSSY = 0; // 1: the buffer has the glossy planes 3-5 (shade::planes)
 layout(constant_id = 6) const uint HFGI_NEXT_STRIDE = 0u; // indirect mode: floats per channel of binding 7
+// Indirect mode: coefficients of U stored (rules::scene::u_bands²); the others are read as 0.
+// Below n² only for a diffuse surface, whose clamped-cosine lobe zeroes them exactly.
+layout(constant_id = 7) const int HFGI_NU = 16;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
@@ -166,8 +169,8 @@ void main() {
     vec3 P = vec3(float(p.x) * pc.texel_size, float(p.y) * pc.texel_size, height(p.x, p.y));
     if (HFGI_INDIRECT != 0) {
         // Incident indirect radiance: U of eq. 21, bilinear from the receiver grid.
-        uint us = hfgi_stride(3 * HFGI_N2);
-        for (int k = 0; k < HFGI_N2; ++k) {
+        uint us = hfgi_stride(3 * HFGI_NU);
+        for (int k = 0; k < HFGI_NU; ++k) {
             for (int c = 0; c < 3; ++c) {
                 uint oc = uint(3 * k + c);
                 hfgi_T[k][c] = w00 * HFGI_LOAD(hfgi_vis, r00 * us + oc) + w10 * HFGI_LOAD(hfgi_vis, r10 * us + oc)
@@ -177,7 +180,7 @@ void main() {
         // With f16, U is stored times the pre-exposure (frame::storage::pre_exposure).
         if (HFGI_HALF != 0u) {
             float unexpose = 1.0 / pc.u_scale;
-            for (int k = 0; k < HFGI_N2; ++k) hfgi_T[k] *= unexpose;
+            for (int k = 0; k < HFGI_NU; ++k) hfgi_T[k] *= unexpose;
         }
     }
     for (uint s = 0u; s < (HFGI_INDIRECT != 0 ? 0u : pc.set_count); ++s) {

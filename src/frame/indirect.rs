@@ -2,7 +2,7 @@
 //! recorded once per bounce after the radiance pyramid of the previous bounce:
 //!
 //! - `indirect.scan`: per receiver of the working grid, the IR vector `U` (eq. 12, 19–21),
-//!   `n²` RGB coefficients (`vec4` each) in [`IndirectPass::u_buffer`].
+//!   RGB coefficients of its first [`u_bands`] bands in [`IndirectPass::u_buffer`].
 //! - `indirect.shade`: the shading shader in indirect mode (`glsl/shade/direct.comp.glsl`,
 //!   `HFGI_INDIRECT = 1`) shades `U` with the diffuse and Phong lobes at full resolution, adds
 //!   the bounce to the shading planes `indirect` and indirect glossy, recomposes `total` and
@@ -26,6 +26,7 @@ use crate::error::Result;
 use crate::math::{azimuth, elevation};
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
+use crate::rules::scene::u_bands;
 use crate::scene::model::{PyramidMode, Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -52,8 +53,9 @@ pub struct IndirectPass {
     /// iteration like a sample).
     chunks: [Vec<(u32, u32)>; 2],
     shade_push: ShadePush,
-    /// SH order and `gi.storage` of `U` (for [`IndirectPass::read_u`]).
-    n: usize,
+    /// Coefficients per channel and `gi.storage` of `U` (for [`IndirectPass::read_u`]):
+    /// [`u_bands`]².
+    u_coefficients: usize,
     storage: Storage,
 }
 
@@ -116,9 +118,9 @@ pub(crate) fn buffer_sizes(
     fold: usize,
     ladder: usize,
 ) -> [(&'static str, u64); 4] {
-    let n = scene.gi.sh_order;
-    // U: receivers × n² × rgb in gi.storage (glsl/inc/hfgi_store.glsl).
-    let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(3 * n * n) as u64);
+    let b = u_bands(scene);
+    // U: receivers × b² × rgb in gi.storage (glsl/inc/hfgi_store.glsl), b = u_bands.
+    let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(3 * b * b) as u64);
     [
         ("hfgi.indirect.samples", samples as u64 * 16),
         ("hfgi.indirect.fold", fold as u64 * 4),
@@ -188,6 +190,7 @@ fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, bound: bool) -> Vec
         (7, push.radiance_stack),
         (8, gi.storage.spec()),
         (9, bound as u32),
+        (10, (u_bands(scene) * u_bands(scene)) as u32),
     ];
     [&own[..], &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }
@@ -307,7 +310,6 @@ impl IndirectPass {
         scene: &Scene,
     ) -> Result<Self> {
         let gi = &scene.gi;
-        let n = gi.sh_order;
         let (ww, wh) = pyramid.work();
         let data = ScanData::new(scene, pyramid.layout().count());
         let levels = data.radiance_levels(scene)?;
@@ -385,7 +387,7 @@ impl IndirectPass {
             push,
             probes: [gi.probes(1), gi.probes(2)],
             shade_push: shade.push(),
-            n,
+            u_coefficients: u_bands(scene) * u_bands(scene),
             storage: gi.storage,
         };
         pass.set_pre_exposure(super::storage::pre_exposure(scene));
@@ -466,16 +468,17 @@ impl IndirectPass {
         });
     }
 
-    /// The IR vectors of the last bounce: receivers × `n²` × rgb in `gi.storage`
-    /// (glsl/inc/hfgi_store.glsl).
+    /// The IR vectors of the last bounce: receivers × `b²` × rgb in `gi.storage`
+    /// (glsl/inc/hfgi_store.glsl), with `b` = [`u_bands`] (bands 0 … b − 1).
     pub fn u_buffer(&self) -> &Buffer {
         &self.buffers[U]
     }
 
-    /// Diagnostics: the IR vectors of the last bounce (receivers × `n²` × rgb, as f32 whatever
-    /// `gi.storage`), read back (waits). Call after a recorded frame completed.
+    /// Diagnostics: the IR vectors of the last bounce (receivers × `b²` × rgb with
+    /// `b` = [`u_bands`], as f32 whatever `gi.storage`), read back (waits). Call after a
+    /// recorded frame completed.
     pub fn read_u(&self, ctx: &Context) -> Result<Vec<f32>> {
-        let values = 3 * self.n * self.n;
+        let values = 3 * self.u_coefficients;
         let receivers = (self.push.work_width * self.push.work_height) as usize;
         let u = super::storage::download_vectors(ctx, &self.buffers[U], self.storage, 0, receivers, values)?;
         let unexpose = 1.0 / self.push.radiance_scale;

@@ -202,7 +202,9 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
 /// (`shade.direct`, `next_stride = None`) or its indirect mode (`indirect.shade`:
 /// `Some(floats per channel of the radiance levels buffer)`, where it writes the next bounce's
 /// input).
-pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 7] {
+/// The indirect mode reads `U`'s first [`u_bands`](crate::rules::scene::u_bands) bands.
+pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 8] {
+    let b = crate::rules::scene::u_bands(scene) as u32;
     [
         (0, scene.gi.sh_order as u32),
         (1, next_stride.is_some() as u32),
@@ -211,6 +213,7 @@ pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 7] {
         (4, scene.gi.storage.spec()),
         (5, glossy_planes(scene) as u32),
         (6, next_stride.unwrap_or(0)),
+        (7, b * b),
     ]
 }
 

@@ -36,3 +36,46 @@ pub fn vector_pyramid(scene: &Scene) -> bool {
         && scene.gi.glossy_pyramid == GlossyPyramid::Vector
         && scene.material.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0))
 }
+
+/// SH bands of the IR vector `U` the renderer stores (docs/indirect.md §4). The indirect shade
+/// of a diffuse surface reads `U` only through the clamped-cosine lobe about the normal, whose
+/// odd bands `l ≥ 3` are exactly zero ([`crate::math::zh::clamped_cosine`]): it stores the bands
+/// up to the last non-zero one (order 4: 3 bands, 9 of 16 coefficients) and shades exactly the
+/// same. All `n` bands when something else reads `U`: a specular colour (the Phong lobe and the
+/// glossy vector pyramid) or sphere blockers (the triple product `U ⊛ V_s` mixes the bands).
+/// Both are fixed at creation (`Renderer::set_material` and the sphere slots cannot add them).
+pub fn u_bands(scene: &Scene) -> usize {
+    let n = scene.gi.sh_order;
+    if scene.material.specular.is_some() || !scene.spheres.is_empty() {
+        return n;
+    }
+    let zh = crate::math::zh::clamped_cosine(n);
+    zh.iter().rposition(|z| *z != 0.0).map_or(n, |l| l + 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::u_bands;
+
+    /// The clamped cosine's ZH vanishes in the odd bands l ≥ 3 (Ramamoorthi & Hanrahan 2001,
+    /// A_l = 0 for odd l > 1), so a diffuse surface keeps bands up to the last even one below
+    /// n (or band 1); a specular colour or a sphere blocker keeps all n.
+    #[test]
+    fn u_keeps_the_bands_up_to_the_last_nonzero_clamped_cosine_band() {
+        let mut s = crate::scene::file::default_scene().unwrap();
+        s.material.specular = None;
+        s.spheres.clear();
+        for (n, kept) in [(1, 1), (2, 2), (3, 3), (4, 3), (5, 5), (6, 5), (7, 7), (8, 7)] {
+            s.gi.sh_order = n;
+            assert_eq!(u_bands(&s), kept, "n = {n}");
+            let mut glossy = s.clone();
+            glossy.material.specular = Some([0.0; 3]);
+            assert_eq!(u_bands(&glossy), n, "n = {n}, specular");
+            let mut spheres = s.clone();
+            let sphere =
+                crate::scene::model::SphereBlocker { center: glam::DVec3::ZERO, radius: 1.0, albedo: [0.5; 3] };
+            spheres.spheres.push(sphere);
+            assert_eq!(u_bands(&spheres), n, "n = {n}, a sphere blocker");
+        }
+    }
+}
