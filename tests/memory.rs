@@ -284,12 +284,18 @@ fn estimate_512_by_subsample() {
         f32_[4] = "gi.storage=\"f32\"";
         assert_eq!(r.total(), memory::renderer(&scene_of("", &f16)).unwrap().total());
         if sub == 1 {
-            // The decimated radiance stack from first principles (docs/pyramid.md): levels 0-7 of
-            // 512² (k_u = 4: 512 … 152 texels) keep 512² planes, 8-11 (128 … 76) 256², 12-15
-            // 128², 16-19 64², 20-22 (16 … 11) 32²; 3 channels of halves.
-            let planes = 8 * 512 * 512 + 4 * 256 * 256 + 4 * 128 * 128 + 4 * 64 * 64 + 3 * 32 * 32;
-            let stack = r.buffers.iter().find(|(b, _)| b == "hfgi.radiance.stack").unwrap().1;
-            assert_eq!(stack, 3 * 2 * planes as u64);
+            // The decimated stacks from first principles (docs/pyramid.md): each plane is 512²
+            // halved while it keeps its level's texels (k = 4: levels 0-3, 512 … 304 texels,
+            // keep 512², 4-7 (256 … 152) 256², 8-11 128², 12-15 64², 16-19 32², 20-22 16²).
+            // The radiance stack: levels 0-22, 3 channels of halves; the height stack: levels
+            // 0-14 (the scans' ladder), f32.
+            let get = |name: &str| r.buffers.iter().find(|(b, _)| b == name).unwrap().1;
+            let planes = 4 * 512 * 512 + 4 * 256 * 256 + 4 * 128 * 128 + 4 * 64 * 64 + 4 * 32 * 32 + 3 * 16 * 16;
+            assert_eq!(get("hfgi.radiance.stack"), 3 * 2 * planes as u64);
+            let planes = 4 * 512 * 512 + 4 * 256 * 256 + 4 * 128 * 128 + 3 * 64 * 64;
+            assert_eq!(get("hfgi.pyramid.stack"), 4 * planes as u64);
+            // Table 1 of the paper: 76 MB at 1× (issue 12).
+            assert!(r.total() <= 76_000_000, "{} B", r.total());
         }
         assert!(r.total() < memory::renderer(&scene_of("", &f32_)).unwrap().total());
         let largest = r.largest().unwrap();

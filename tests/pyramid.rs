@@ -106,8 +106,22 @@ fn memory_of_each_mode_at_512() {
     }
     let ratio = bytes[0] as f64 / bytes[1] as f64;
     eprintln!("pyramid memory 512²: stack / pyramid = {ratio:.1}×");
-    // n_v planes of N² against Σ N²·2^(−2i/k) ≈ N²/(1 − 2^(−1/2)) plus the levels the stack is built from.
-    assert!(ratio > 10.0, "ratio {ratio}");
+    // The stack adds one f32 plane per level, each the working grid (512) halved while the
+    // half still holds the level's round(512·2^(−i/4)) texels: 512 for levels 0-3, 256 for 4-7,
+    // 128 for 8-11, … (docs/pyramid.md "Storage modes"; the paper's full-size planes would be
+    // 37 × 512², > 10× the pyramid).
+    let layout = PyramidLayout::new(512, 512, 4).unwrap();
+    let planes: u64 = (0..layout.count() as i32)
+        .map(|i| {
+            let size = (512.0 * 2f64.powf(-i as f64 / 4.0)).round().max(1.0) as u64;
+            let mut side = 512u64;
+            while side / 2 >= size && side > 1 {
+                side /= 2;
+            }
+            (side * side).div_ceil(2) * 2 * 4 // padded to an even count (the 1×1 planes)
+        })
+        .sum();
+    assert_eq!(bytes[0] - bytes[1], planes + 16 * (layout.count() as u64 + 1), "stack planes and their table");
 }
 
 #[test]

@@ -1,31 +1,28 @@
 // hfgi — height lookups in the pyramid, the way every scanning pass does them.
-// The includer declares `float hfgi_levels[]`, `hfgi_Level hfgi_table[]` and `float hfgi_stack[]`
-// (bind the levels buffer as the stack in pyramid mode), then includes this file.
+// The includer declares `float hfgi_levels[]`, `hfgi_Level hfgi_table[]`, `float hfgi_stack[]`
+// and `uvec4 hfgi_hplanes[]` (in pyramid mode, bind the levels buffer as the stack and any
+// buffer as the planes), then includes this file.
 // Positions are in level-0 texel units.
 #ifndef HFGI_PYRAMID_GLSL
 #define HFGI_PYRAMID_GLSL
 #include "hfgi_filter.glsl"
 
-// Stack planes of the working grid: `source` as in hfgi_Level. A shader reading two such stacks
-// would define HFGI_STACK_READ(source, i) to pick the buffer; the radiance stack's decimated
-// planes are not such a stack (glsl/indirect/scan.comp.glsl reads them through their table).
-#ifndef HFGI_STACK_READ
-#define HFGI_STACK_READ(source, i) hfgi_stack[i]
-#endif
-
-// Bilinear value of stack plane `plane` (of `source`) at level-0 position p0: the working grid's
-// four texels around p0, their addresses computed once.
-float hfgi_stack_bilinear(uint source, uint plane, vec2 p0, vec2 n0, uvec2 work, bool wrap) {
-    vec2 pw = (p0 + 0.5) * vec2(work) / n0 - 0.5;
+// Bilinear value of height-stack plane `plane` at level-0 position p0. The planes' sizes and
+// offsets come from `uvec4 hfgi_hplanes[]`, which the includer declares (PyramidLayout::
+// stack_planes: width, height, offset; a coarse level's plane is the working grid halved while
+// it keeps twice the level's texels). The radiance stack has its own planes table
+// (glsl/indirect/scan.comp.glsl reads it).
+float hfgi_stack_bilinear(uint plane, vec2 p0, vec2 n0, bool wrap) {
+    uvec4 pl = hfgi_hplanes[plane];
+    vec2 pw = (p0 + 0.5) * vec2(pl.xy) / n0 - 0.5;
     vec2 fl = floor(pw);
     vec2 f = pw - fl;
     ivec2 i = ivec2(fl);
-    int w = int(work.x), h = int(work.y);
+    int w = int(pl.x), h = int(pl.y);
     uint x0 = uint(hfgi_address(i.x, w, wrap)), x1 = uint(hfgi_address(i.x + 1, w, wrap));
-    uint r0 = plane * work.x * work.y + uint(hfgi_address(i.y, h, wrap)) * work.x;
-    uint r1 = plane * work.x * work.y + uint(hfgi_address(i.y + 1, h, wrap)) * work.x;
-    return hfgi_bilerp(HFGI_STACK_READ(source, r0 + x0), HFGI_STACK_READ(source, r0 + x1),
-                       HFGI_STACK_READ(source, r1 + x0), HFGI_STACK_READ(source, r1 + x1), f);
+    uint r0 = pl.z + uint(hfgi_address(i.y, h, wrap)) * pl.x;
+    uint r1 = pl.z + uint(hfgi_address(i.y + 1, h, wrap)) * pl.x;
+    return hfgi_bilerp(hfgi_stack[r0 + x0], hfgi_stack[r0 + x1], hfgi_stack[r1 + x0], hfgi_stack[r1 + x1], f);
 }
 
 // Flags of hfgi_VisibilityPush.flags / hfgi_IndirectPush.flags (docs/accuracy.md §4; the Rust
@@ -44,14 +41,14 @@ const uint HFGI_DYNAMIC_FLAGS = HFGI_FLAG_ACCUMULATE | HFGI_FLAG_MAX_BOUND;
 
 // Value of table entry `plane` (level `l`, of a pyramid whose level 0 is `base`) at level-0
 // position p0. `raw`: the unfiltered level as a bilinear surface (gi.level0 = "bilinear"; only
-// meaningful on level 0, whose texels are the samples themselves). Otherwise, stack mode:
-// bilinear on the synthesized plane (working resolution `work`); pyramid mode: the cubic
-// B-spline of the decimated level, on the fly.
-float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, uvec2 work, bool stack_mode, bool wrap,
+// meaningful on level 0, whose texels are the samples themselves). Otherwise, stack mode (the
+// height stack only): bilinear on the synthesized plane; pyramid mode: the cubic B-spline of
+// the decimated level, on the fly.
+float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, bool stack_mode, bool wrap,
                       bool raw) {
     vec2 n0 = vec2(float(base.width), float(base.height));
     if (raw) return hfgi_bilinear_at(l, hfgi_rescale(p0, n0, l), wrap);
-    if (stack_mode) return hfgi_stack_bilinear(l.source, plane, p0, n0, work, wrap);
+    if (stack_mode) return hfgi_stack_bilinear(plane, p0, n0, wrap); // the height stack's
     return hfgi_bspline_at(l, hfgi_rescale(p0, n0, l), wrap);
 }
 
@@ -77,8 +74,8 @@ struct hfgi_Scan {
 // reads the heights' buffers without a per-sample choice or table read.
 float hfgi_height_at(hfgi_Scan s, uint level, vec2 p0) {
     if (s.raw0 && level == 0u) return hfgi_bilinear_at(s.l0, hfgi_rescale(p0, s.n0, s.l0), s.wrap);
-    if (s.stack_mode) return hfgi_stack_bilinear(0u, level, p0, s.n0, s.work, s.wrap);
-    return hfgi_pyramid_at(s.l0, hfgi_table[level], level, p0, s.work, s.stack_mode, s.wrap, false);
+    if (s.stack_mode) return hfgi_stack_bilinear(level, p0, s.n0, s.wrap);
+    return hfgi_pyramid_at(s.l0, hfgi_table[level], level, p0, s.stack_mode, s.wrap, false);
 }
 
 // Pyramid level read by scan sample i (NS09 §5.2 level offset; docs/direct.md §2): the level

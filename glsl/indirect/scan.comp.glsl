@@ -47,14 +47,16 @@ layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };         
 // The radiance stack's planes (stack mode): width, height, offset per level of channel 0, then
 // the channel stride (PyramidLayout::stack_planes: coarse planes are smaller than the working grid).
 layout(std430, binding = 12) readonly buffer RPlanes { uvec4 hfgi_rplanes[]; };
+// The height stack's planes (hfgi_pyramid.glsl; stack mode).
+layout(std430, binding = 13) readonly buffer HPlanes { uvec4 hfgi_hplanes[]; };
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 #include "hfgi_store.glsl"
 // With f16 the radiance stack holds radiance × pc.radiance_scale (the pre-exposure,
 // frame::storage::pre_exposure): its reads divide by it, and U is stored times it.
 float hfgi_unexpose;
-// hfgi_pyramid.glsl's stack reads (HFGI_STACK_READ: hfgi_stack) are the height stack's: the
-// radiance stack's planes have their own sizes (binding 12), and radiance_rgb reads them itself.
+// hfgi_pyramid.glsl's stack reads are the height stack's (hfgi_stack, its planes hfgi_hplanes):
+// the radiance stack has its own planes (binding 12), and radiance_rgb reads them itself.
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
@@ -129,14 +131,14 @@ vec3 normal_at(vec2 q, bool wrap) {
 // texel addresses, so they are computed once and each channel reads its four corners at its own
 // plane (the same values and arithmetic as hfgi_pyramid_at per channel). Pyramid mode (no stack,
 // not raw) reads each channel with hfgi_pyramid_at.
-vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool raw) {
+vec3 radiance_rgb(uint lv, vec2 q, bool stack_mode, bool wrap, bool raw) {
     uint n_u = pc.radiance_levels;
     vec3 rad;
     if (!raw && !stack_mode) {
         hfgi_Level r0 = hfgi_radiance_table[0];
         for (uint c = 0u; c < 3u; ++c) {
             uint e = c * n_u + lv;
-            rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap, false);
+            rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, false, wrap, false);
         }
         return rad;
     }
@@ -169,11 +171,11 @@ vec3 radiance_rgb(uint lv, vec2 q, uvec2 work, bool stack_mode, bool wrap, bool 
 // pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
 // direction back to the receiver about q's normal.
 // With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image.
-vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stack_mode, bool wrap, bool raw0) {
+vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, bool stack_mode, bool wrap, bool raw0) {
     bool raw = raw0 && lv == 0u;
     hfgi_Level r0 = hfgi_radiance_table[0];
     uint n_u = pc.radiance_levels;
-    vec3 rad = radiance_rgb(lv, q, work, stack_mode, wrap, raw);
+    vec3 rad = radiance_rgb(lv, q, stack_mode, wrap, raw);
     if (HFGI_VECTOR != 0) {
         vec3 nc = normal_at(q, wrap);
         vec3 s = -vec3(cos(omega) * d, sin(omega));
@@ -185,7 +187,7 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, uvec2 work, bool stac
                 vec3 t;
                 for (uint c = 0u; c < 3u; ++c) {
                     uint e = (3u + 3u * uint(k) + c) * n_u + lv;
-                    t[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, work, false, wrap, raw);
+                    t[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, false, wrap, raw);
                 }
                 gl += t * (hfgi_zh_glossy[l] * hfgi_y[k]);
             }
@@ -203,7 +205,7 @@ void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running
     uint rl = hfgi_radiance_level[i - scan.first];
     float seg[HFGI_NE];
     hfgi_elevation(running, omega, seg);
-    vec3 rad = member_radiance(rl, q, omega, d, scan.work, HFGI_RSTACK != 0u, wrap, scan.raw0);
+    vec3 rad = member_radiance(rl, q, omega, d, HFGI_RSTACK != 0u, wrap, scan.raw0);
     for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
     running = omega;
     running_slope = slope;
@@ -328,7 +330,7 @@ void main() {
         if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running + 1e-5) {
             float seg[HFGI_NE];
             hfgi_elevation(running, limit, seg);
-            vec3 rad = member_radiance(0u, scan.p, limit, d, scan.work, HFGI_RSTACK != 0u, wrap, scan.raw0);
+            vec3 rad = member_radiance(0u, scan.p, limit, d, HFGI_RSTACK != 0u, wrap, scan.raw0);
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }

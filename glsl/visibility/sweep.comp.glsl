@@ -22,6 +22,7 @@ layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
 layout(std430, binding = 3) readonly buffer Samples { vec4 hfgi_samples[]; };  // cos φ, sin φ, lo, hi
 layout(std430, binding = 4) writeonly buffer Horizons { float hfgi_horizons[]; }; // [azimuth][receiver][2]
 layout(std430, binding = 5) buffer Hull { vec2 hfgi_hull[]; };                    // [line][entry]: (u, h)
+layout(std430, binding = 6) readonly buffer HPlanes { uvec4 hfgi_hplanes[]; };     // the height stack's planes (hfgi_pyramid.glsl)
 layout(push_constant) uniform Push { hfgi_SweepPush pc; };
 #include "hfgi_pyramid.glsl"
 

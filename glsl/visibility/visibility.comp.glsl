@@ -27,6 +27,7 @@ layout(std430, binding = 3) readonly buffer Samples { vec4 hfgi_samples[]; }; //
 layout(std430, binding = 4) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE, row-major
 layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };                   // accumulated over azimuth chunks (hfgi_store.glsl)
 layout(std430, binding = 6) readonly buffer Horizons { float hfgi_horizons[]; }; // sweep: [sample][receiver][2]
+layout(std430, binding = 7) readonly buffer HPlanes { uvec4 hfgi_hplanes[]; };   // the height stack's planes (hfgi_pyramid.glsl)
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"

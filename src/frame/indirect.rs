@@ -229,7 +229,7 @@ fn scan_pipelines(
     for &bound in kinds {
         let spec = scan_spec(scene, n_v, push, bound);
         let size = std::mem::size_of::<IndirectPush>() as u32;
-        let kinds = [DescriptorKind::StorageBuffer; 13];
+        let kinds = [DescriptorKind::StorageBuffer; 14];
         let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds, size, &spec, 1)?;
         sets.push(pipes.push_get(scan).allocate_set(ctx, binds)?);
     }
@@ -355,6 +355,7 @@ impl IndirectPass {
                 Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
                 // Pyramid mode has no stack and no planes: any buffer.
                 Bind::Buffer(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
+                Bind::Buffer(pyramid.height_planes()),
             ];
             let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
             let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;

@@ -350,7 +350,7 @@ impl Planner {
                     &mut stages,
                     Stage::PyramidSynthesize,
                     format!(
-                        "stack mode: the {} of {} levels the scans read resampled to the {}×{} working grid",
+                        "stack mode: the {} of {} levels the scans read resampled to planes of at most {}×{}",
                         self.stack_levels, self.levels, self.work.0, self.work.1
                     ),
                 ),

@@ -52,9 +52,9 @@ pub struct PyramidKind {
     /// How the stack stores its values (the radiance stack follows `gi.storage`; the height
     /// stack is always f32: heights need more than a half's 11 bits).
     pub stack_storage: Storage,
-    /// Stack planes at twice their level's resolution instead of the working one
-    /// (`PyramidLayout::stack_plane_size`): the radiance stack, read once per casting point.
-    /// The height stack, read at every scan sample, keeps one plane size.
+    /// Stack planes at their level's resolution (rounded up to the working grid halved a whole
+    /// number of times) instead of the working one (`PyramidLayout::stack_plane_size`): both
+    /// stacks (docs/performance.md §16).
     pub decimated_stack: bool,
 }
 
@@ -67,7 +67,7 @@ impl PyramidKind {
         stage_synthesize: STAGE_SYNTHESIZE,
         label: "pyramid",
         stack_storage: Storage::F32,
-        decimated_stack: false,
+        decimated_stack: true,
     };
 }
 
@@ -489,6 +489,13 @@ impl HeightPyramid {
         self.planes.as_ref()
     }
 
+    /// What the scanning shaders bind as the height stack's planes (`hfgi_hplanes`,
+    /// glsl/inc/hfgi_pyramid.glsl): [`HeightPyramid::stack_planes_buffer`], or in pyramid mode,
+    /// which never reads it, the level table.
+    pub fn height_planes(&self) -> &Buffer {
+        self.planes.as_ref().unwrap_or(&self.table)
+    }
+
     /// Stack planes per channel: the finest levels the stack holds (`n_v` unless created with
     /// fewer; [`HeightPyramid::with_kind`]).
     pub fn stack_levels(&self) -> usize {
@@ -558,9 +565,6 @@ impl HeightPyramid {
     /// values are relative to [`HeightPyramid::origin`] (absolute with the default origin 0).
     /// In stack mode a query's level must be one the stack holds (`< stack_levels()`).
     pub fn probe(&self, ctx: &Context, queries: &[[f32; 3]]) -> Result<Vec<f32>> {
-        if self.kind.decimated_stack && self.stack.is_some() {
-            return Err(Error::param("probe", "a decimated stack", "the height stack or pyramid mode"));
-        }
         let top = if self.stack.is_some() { self.stack_levels } else { self.layout.count() };
         if let Some(q) = queries.iter().find(|q| !(q[0] >= 0.0 && (q[0] as usize) < top)) {
             return Err(Error::param("probe level", q[0], format!("0 ≤ level < {top}")));
@@ -584,7 +588,7 @@ impl HeightPyramid {
             let p = pipe.insert(ComputePipeline::new(
                 ctx,
                 &shaders::PYRAMID_PROBE_COMP,
-                &[DescriptorKind::StorageBuffer; 5],
+                &[DescriptorKind::StorageBuffer; 6],
                 PUSH_SIZE,
                 &[],
                 1,
@@ -598,6 +602,7 @@ impl HeightPyramid {
                     Bind::Buffer(stack),
                     Bind::Buffer(&qb),
                     Bind::Buffer(&rb),
+                    Bind::Buffer(self.height_planes()),
                 ],
             )?;
             let push = PyramidPush {

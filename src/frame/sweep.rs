@@ -115,6 +115,7 @@ impl SweepPass {
                 Bind::Buffer(samples),
                 Bind::Buffer(&horizons),
                 Bind::Buffer(&hull),
+                Bind::Buffer(pyramid.height_planes()),
             ],
         );
         let (pipeline, descriptors) = match made {

@@ -156,7 +156,7 @@ impl VisibilityPass {
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::VISIBILITY_VISIBILITY_COMP,
-                &[DescriptorKind::StorageBuffer; 7],
+                &[DescriptorKind::StorageBuffer; 8],
                 std::mem::size_of::<VisibilityPush>() as u32,
                 &[
                     &[
@@ -181,6 +181,7 @@ impl VisibilityPass {
                     Bind::Buffer(&parts[1]),
                     Bind::Buffer(&parts[2]),
                     Bind::Buffer(sweep.as_ref().map_or(&parts[0], |s: &SweepPass| s.horizons())),
+                    Bind::Buffer(pyramid.height_planes()),
                 ],
             )
         })();

@@ -104,7 +104,7 @@ impl CpuPyramid {
         wrap: bool,
         synthesize: bool,
     ) -> Result<Self> {
-        Self::build_stack(data, size, work, k_v, wrap, synthesize.then_some(false))
+        Self::build_stack(data, size, work, k_v, wrap, synthesize.then_some(true))
     }
 
     /// [`CpuPyramid::build_f64`] with `stack`: `None` no stack, `Some(decimated)` a stack whose

@@ -27,7 +27,11 @@ impl Planner {
         let (ww, wh) = self.work;
         let storage = match self.mode {
             PyramidMode::Stack => {
-                format!("stack mode: {} planes of {ww}×{wh} (the levels the scans read)", self.stack_levels)
+                let how = "the working grid halved while it keeps each level's texels";
+                format!(
+                    "stack mode: {} planes of at most {ww}×{wh} (the levels the scans read; {how})",
+                    self.stack_levels
+                )
             }
             PyramidMode::Pyramid => "pyramid mode: decimated levels only".into(),
         };
