@@ -52,10 +52,6 @@ pub struct PyramidKind {
     /// How the stack stores its values (the radiance stack follows `gi.storage`; the height
     /// stack is always f32: heights need more than a half's 11 bits).
     pub stack_storage: Storage,
-    /// Stack planes at their level's resolution (rounded up to the working grid halved a whole
-    /// number of times) instead of the working one (`PyramidLayout::stack_plane_size`): both
-    /// stacks (docs/performance.md §16).
-    pub decimated_stack: bool,
 }
 
 impl PyramidKind {
@@ -67,7 +63,6 @@ impl PyramidKind {
         stage_synthesize: STAGE_SYNTHESIZE,
         label: "pyramid",
         stack_storage: Storage::F32,
-        decimated_stack: true,
     };
 }
 
@@ -120,8 +115,8 @@ pub(crate) struct PyramidBuffers {
     pub levels: u64,
     /// `hfgi.{label}.table`: one [`GpuLevel`] per channel and level.
     pub table: u64,
-    /// `hfgi.{label}.stack`: stack mode only, `channels · stack_levels` planes of `work` (or
-    /// smaller, [`PyramidKind::decimated_stack`]) in the kind's storage.
+    /// `hfgi.{label}.stack`: stack mode only, `channels · stack_levels` planes of at most `work`
+    /// (`PyramidLayout::stack_plane_size`) in the kind's storage.
     pub stack: Option<u64>,
     /// `hfgi.{label}.planes`: stack mode only, the planes' sizes and offsets
     /// (`PyramidLayout::stack_planes`, `uvec4` each) that the synthesis and the scan read.
@@ -166,8 +161,8 @@ impl PyramidBuffers {
                 format!("2×2 up to {width}×{height}"),
             ));
         }
-        let planes = layout.stack_planes(work, stack_levels, kind.decimated_stack);
-        let stack_floats = layout.stack_values(work, stack_levels, kind.decimated_stack) * channels;
+        let planes = layout.stack_planes(work, stack_levels);
+        let stack_floats = layout.stack_values(work, stack_levels) * channels;
         if mode == PyramidMode::Stack && stack_floats > u32::MAX as u64 {
             return Err(Error::param(
                 "gi.pyramid",

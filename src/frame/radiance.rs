@@ -28,7 +28,6 @@ pub const STAGE_SYNTHESIZE: &str = super::stages::stage_name("radiance.synthesiz
 pub fn radiance_kind(channels: u32, storage: Storage) -> PyramidKind {
     PyramidKind {
         stack_storage: storage,
-        decimated_stack: true,
         channels,
         source: 1,
         stage_decimate: STAGE_DECIMATE,

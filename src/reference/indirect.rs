@@ -231,10 +231,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
         let mode_stack = stack && !vector;
         let channels: Vec<CpuPyramid> = images
             .into_iter()
-            .map(|data| {
-                let stack = mode_stack.then_some(true); // decimated planes (docs/pyramid.md)
-                CpuPyramid::build_stack(data, (w, h), work, gi.radiance_level_step, scene.wrap, stack)
-            })
+            .map(|data| CpuPyramid::build_f64(data, (w, h), work, gi.radiance_level_step, scene.wrap, mode_stack))
             .collect::<Result<_>>()?;
         let n_u = channels[0].layout.count();
         let levels: Vec<usize> = scan_steps(gi, n_v)

@@ -13,11 +13,9 @@ pub struct CpuPyramid {
     pub wrap: bool,
     /// `levels[i]`: level `i`, row-major.
     pub levels: Vec<Vec<f64>>,
-    /// `stack[i]`: level `i` B-spline-resampled to the working resolution `work`, or with a
-    /// decimated stack to `layout.stack_plane_size(i, work, true)`.
+    /// `stack[i]`: level `i` B-spline-resampled to its plane, `layout.stack_plane_size(i, work)`
+    /// (docs/pyramid.md "Decimated stacks").
     pub stack: Option<Vec<Vec<f64>>>,
-    /// Whether the stack's planes are decimated (the radiance stack, docs/pyramid.md).
-    pub decimated: bool,
     /// Working resolution of the stack.
     pub work: (usize, usize),
 }
@@ -104,19 +102,6 @@ impl CpuPyramid {
         wrap: bool,
         synthesize: bool,
     ) -> Result<Self> {
-        Self::build_stack(data, size, work, k_v, wrap, synthesize.then_some(true))
-    }
-
-    /// [`CpuPyramid::build_f64`] with `stack`: `None` no stack, `Some(decimated)` a stack whose
-    /// planes are decimated or at the working resolution (the twin of the radiance stack).
-    pub fn build_stack(
-        data: Vec<f64>,
-        size: (usize, usize),
-        work: (usize, usize),
-        k_v: u32,
-        wrap: bool,
-        stack: Option<bool>,
-    ) -> Result<Self> {
         let layout = PyramidLayout::new(size.0, size.1, k_v)?;
         let mut levels: Vec<Vec<f64>> = vec![data];
         for i in 1..layout.count() {
@@ -133,13 +118,12 @@ impl CpuPyramid {
             }
             levels.push(out);
         }
-        let decimated = stack == Some(true);
-        let mut me = Self { layout, wrap, levels, stack: None, decimated, work };
-        if stack.is_some() {
+        let mut me = Self { layout, wrap, levels, stack: None, work };
+        if synthesize {
             let (w, h) = size;
             let stack = (0..me.layout.count())
                 .map(|i| {
-                    let (ww, wh) = me.layout.stack_plane_size(i, work, decimated);
+                    let (ww, wh) = me.layout.stack_plane_size(i, work);
                     let mut plane = vec![0.0; ww * wh];
                     for y in 0..wh {
                         for x in 0..ww {
@@ -173,7 +157,7 @@ impl CpuPyramid {
     /// to the plane's grid). `None` if the stack was not built.
     pub fn sample_stack(&self, i: usize, x: f64, y: f64) -> Option<f64> {
         let l0 = self.layout.levels[0];
-        let (ww, wh) = self.layout.stack_plane_size(i, self.work, self.decimated);
+        let (ww, wh) = self.layout.stack_plane_size(i, self.work);
         let (xw, yw) = (rescale(x, l0.width as usize, ww), rescale(y, l0.height as usize, wh));
         self.stack.as_ref().map(|s| bilinear(&s[i], ww, wh, xw, yw, self.wrap))
     }

@@ -76,50 +76,44 @@ impl PyramidLayout {
         2f64.powf(-((self.count() - 1 - i) as f64) / self.k_v as f64)
     }
 
-    /// The size of stack plane `i` (level `i` resampled for the scans, docs/pyramid.md "Storage
-    /// modes"): the working resolution `work`; with `decimated`, `work` halved `j` times, the
-    /// largest `j` that keeps at least level `i`'s texels along both axes (a coarse level's
-    /// cubic B-spline is smoother than its texels: a bilinear read of it at that density moves
-    /// the errors against the exact reference by ≤ 0.006 percentage points, docs/performance.md
-    /// §16).
-    pub fn stack_plane_size(&self, i: usize, work: (usize, usize), decimated: bool) -> (usize, usize) {
+    /// The size of stack plane `i` (level `i` resampled for the scans, docs/pyramid.md
+    /// "Decimated stacks"): the working resolution `work` halved `j` times, the largest `j` that
+    /// keeps at least level `i`'s texels along both axes (a coarse level's cubic B-spline is
+    /// smoother than its texels: a bilinear read of it at that density moves the errors against
+    /// the exact reference by ≤ 0.006 percentage points, docs/performance.md §16).
+    pub fn stack_plane_size(&self, i: usize, work: (usize, usize)) -> (usize, usize) {
         let l = self.levels[i];
         let fits = |j: u32| (work.0 >> j) >= l.width as usize && (work.1 >> j) >= l.height as usize;
-        let j = if decimated { (1..31).take_while(|&j| fits(j)).last().unwrap_or(0) } else { 0 };
+        let j = (1..31).take_while(|&j| fits(j)).last().unwrap_or(0);
         (work.0 >> j, work.1 >> j)
     }
 
     /// The stack's first `planes` planes per channel: `[width, height, offset, 0]` each, offsets
-    /// in values from the channel's start, then `[0, 0, stride, 0]` with the channel stride. A
-    /// decimated stack pads every plane to an even count (two f16 values per 32-bit word never
-    /// straddle planes); a full one is `planes` planes of `work`, unpadded.
-    pub fn stack_planes(&self, work: (usize, usize), planes: usize, decimated: bool) -> Vec<[u32; 4]> {
+    /// in values from the channel's start, then `[0, 0, stride, 0]` with the channel stride.
+    /// Every plane is padded to an even count (two f16 values per 32-bit word never straddle
+    /// planes).
+    pub fn stack_planes(&self, work: (usize, usize), planes: usize) -> Vec<[u32; 4]> {
         let mut out = Vec::with_capacity(planes + 1);
         let mut offset = 0u64;
         for i in 0..planes {
-            let (w, h) = self.stack_plane_size(i, work, decimated);
+            let (w, h) = self.stack_plane_size(i, work);
             out.push([w as u32, h as u32, offset as u32, 0]);
-            offset += self.stack_plane_values(i, work, decimated);
+            offset += self.stack_plane_values(i, work);
         }
         out.push([0, 0, offset as u32, 0]);
         out
     }
 
-    /// The values stack plane `i` occupies: its texels, padded to an even count when decimated.
-    fn stack_plane_values(&self, i: usize, work: (usize, usize), decimated: bool) -> u64 {
-        let (w, h) = self.stack_plane_size(i, work, decimated);
-        let count = (w * h) as u64;
-        if decimated {
-            count.div_ceil(2) * 2
-        } else {
-            count
-        }
+    /// The values stack plane `i` occupies: its texels, padded to an even count.
+    fn stack_plane_values(&self, i: usize, work: (usize, usize)) -> u64 {
+        let (w, h) = self.stack_plane_size(i, work);
+        ((w * h) as u64).div_ceil(2) * 2
     }
 
     /// The channel stride of [`PyramidLayout::stack_planes`] in u64 (its `u32` offsets are exact
     /// while the whole stack holds fewer than 2³² values).
-    pub fn stack_values(&self, work: (usize, usize), planes: usize, decimated: bool) -> u64 {
-        (0..planes).map(|i| self.stack_plane_values(i, work, decimated)).sum()
+    pub fn stack_values(&self, work: (usize, usize), planes: usize) -> u64 {
+        (0..planes).map(|i| self.stack_plane_values(i, work)).sum()
     }
 }
 
@@ -127,8 +121,8 @@ impl PyramidLayout {
 mod tests {
     use super::*;
 
-    /// Decimated planes: the working grid halved while both axes keep ≥ the level's texels,
-    /// not once more; full planes: the working grid; the table's offsets are the padded sums.
+    /// Planes: the working grid halved while both axes keep ≥ the level's texels, not once
+    /// more; the table's offsets are the padded sums.
     #[test]
     fn stack_planes_keep_their_levels_resolution() {
         for (w, h, work, k) in
@@ -137,29 +131,27 @@ mod tests {
             let layout = PyramidLayout::new(w, h, k).unwrap();
             for i in 0..layout.count() {
                 let l = layout.levels[i];
-                let (pw, ph) = layout.stack_plane_size(i, work, true);
-                assert_eq!(layout.stack_plane_size(i, work, false), work);
+                let (pw, ph) = layout.stack_plane_size(i, work);
                 let j = (0..31).find(|&j| (work.0 >> j, work.1 >> j) == (pw, ph));
                 let j = j.unwrap_or_else(|| panic!("{w}×{h} level {i}: {pw}×{ph} is no power-of-two reduction"));
                 let keeps = |a: usize, b: usize| a >= l.width as usize && b >= l.height as usize;
                 assert!(j == 0 || keeps(pw, ph), "{w}×{h} level {i}: {pw}×{ph} below {}×{}", l.width, l.height);
                 assert!(!keeps(work.0 >> (j + 1), work.1 >> (j + 1)), "{w}×{h} level {i}: {pw}×{ph} could be halved");
             }
-            let planes = layout.stack_planes(work, layout.count(), true);
+            let planes = layout.stack_planes(work, layout.count());
             let mut offset = 0;
             for (i, p) in planes[..layout.count()].iter().enumerate() {
-                let (pw, ph) = layout.stack_plane_size(i, work, true);
+                let (pw, ph) = layout.stack_plane_size(i, work);
                 assert_eq!(*p, [pw as u32, ph as u32, offset, 0]);
                 offset += ((pw * ph) as u32).div_ceil(2) * 2;
             }
             assert_eq!(planes[layout.count()], [0, 0, offset, 0]);
-            let full = layout.stack_planes(work, 3, false);
-            assert_eq!(full[3][2] as usize, 3 * work.0 * work.1);
+            assert_eq!(planes[0][..2], [work.0 as u32, work.1 as u32], "level 0 keeps the working grid");
         }
         // 512², k = 4: levels 512, 431, 362, 304 keep 512² planes, 256 … 152 get 256², 128 … 76
         // get 128², 64 get 64².
         let layout = PyramidLayout::new(512, 512, 4).unwrap();
-        let sizes: Vec<usize> = (0..13).map(|i| layout.stack_plane_size(i, (512, 512), true).0).collect();
+        let sizes: Vec<usize> = (0..13).map(|i| layout.stack_plane_size(i, (512, 512)).0).collect();
         assert_eq!(sizes, [512, 512, 512, 512, 256, 256, 256, 256, 128, 128, 128, 128, 64]);
     }
 }
