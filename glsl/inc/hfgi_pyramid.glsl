@@ -10,7 +10,7 @@
 // Bilinear value of height-stack plane `plane` at level-0 position p0. The planes' sizes and
 // offsets come from `uvec4 hfgi_hplanes[]`, which the includer declares (PyramidLayout::
 // stack_planes: width, height, offset; a coarse level's plane is the working grid halved while
-// it keeps twice the level's texels). The radiance stack has its own planes table
+// it keeps the level's texels). The radiance stack has its own planes table
 // (glsl/indirect/scan.comp.glsl reads it).
 float hfgi_stack_bilinear(uint plane, vec2 p0, vec2 n0, bool wrap) {
     uvec4 pl = hfgi_hplanes[plane];
