@@ -57,7 +57,6 @@ float hfgi_pyramid_at(hfgi_Level base, hfgi_Level l, uint plane, vec2 p0, bool s
 struct hfgi_Scan {
     vec2 p;           // receiver, level-0 texels (§1)
     vec2 n0;          // level-0 size
-    uvec2 work;       // receiver grid
     uint level_step;  // k
     uint level_bias;  // k·o
     float texel_size;
@@ -99,7 +98,7 @@ hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias,
     l0.source = 0u; // the heights
     vec2 n0 = vec2(float(l0.width), float(l0.height));
     vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5;
-    return hfgi_Scan(p, n0, work, level_step, level_bias, texel_size, stack_mode, wrap,
+    return hfgi_Scan(p, n0, level_step, level_bias, texel_size, stack_mode, wrap,
                      (flags & HFGI_FLAG_RAW_LEVEL0) != 0u, -int(extent & 0xffffu), n_v + int(extent >> 16), l0);
 }
 

@@ -2,7 +2,7 @@
 //! recorded once per bounce after the radiance pyramid of the previous bounce:
 //!
 //! - `indirect.scan`: per receiver of the working grid, the IR vector `U` (eq. 12, 19–21),
-//!   RGB coefficients of its first [`u_bands`] bands in [`IndirectPass::u_buffer`].
+//!   RGB coefficients of its first [`u_bands`](crate::rules::scene::u_bands) bands in [`IndirectPass::u_buffer`].
 //! - `indirect.shade`: the shading shader in indirect mode (`glsl/shade/direct.comp.glsl`,
 //!   `HFGI_INDIRECT = 1`) shades `U` with the diffuse and Phong lobes at full resolution, adds
 //!   the bounce to the shading planes `indirect` and indirect glossy, recomposes `total` and
@@ -26,7 +26,7 @@ use crate::error::Result;
 use crate::math::{azimuth, elevation};
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
-use crate::rules::scene::u_bands;
+use crate::rules::scene::u_coefficients;
 use crate::scene::model::{PyramidMode, Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -53,8 +53,8 @@ pub struct IndirectPass {
     /// iteration like a sample).
     chunks: [Vec<(u32, u32)>; 2],
     shade_push: ShadePush,
-    /// Coefficients per channel and `gi.storage` of `U` (for [`IndirectPass::read_u`]):
-    /// [`u_bands`]².
+    /// Coefficients per channel ([`u_coefficients`]) and `gi.storage` of `U` (for
+    /// [`IndirectPass::read_u`]).
     u_coefficients: usize,
     storage: Storage,
 }
@@ -118,9 +118,9 @@ pub(crate) fn buffer_sizes(
     fold: usize,
     ladder: usize,
 ) -> [(&'static str, u64); 4] {
-    let b = u_bands(scene);
-    // U: receivers × b² × rgb in gi.storage (glsl/inc/hfgi_store.glsl), b = u_bands.
-    let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(3 * b * b) as u64);
+    // U: receivers × u_coefficients × rgb in gi.storage (glsl/inc/hfgi_store.glsl).
+    let u = 3 * u_coefficients(scene);
+    let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(u) as u64);
     [
         ("hfgi.indirect.samples", samples as u64 * 16),
         ("hfgi.indirect.fold", fold as u64 * 4),
@@ -190,7 +190,7 @@ fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, bound: bool) -> Vec
         (7, push.radiance_stack),
         (8, gi.storage.spec()),
         (9, bound as u32),
-        (10, (u_bands(scene) * u_bands(scene)) as u32),
+        (10, u_coefficients(scene) as u32),
     ];
     [&own[..], &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }
@@ -388,7 +388,7 @@ impl IndirectPass {
             push,
             probes: [gi.probes(1), gi.probes(2)],
             shade_push: shade.push(),
-            u_coefficients: u_bands(scene) * u_bands(scene),
+            u_coefficients: u_coefficients(scene),
             storage: gi.storage,
         };
         pass.set_pre_exposure(super::storage::pre_exposure(scene));
@@ -470,13 +470,13 @@ impl IndirectPass {
     }
 
     /// The IR vectors of the last bounce: receivers × `b²` × rgb in `gi.storage`
-    /// (glsl/inc/hfgi_store.glsl), with `b` = [`u_bands`] (bands 0 … b − 1).
+    /// (glsl/inc/hfgi_store.glsl), with `b` = [`u_bands`](crate::rules::scene::u_bands) (bands 0 … b − 1).
     pub fn u_buffer(&self) -> &Buffer {
         &self.buffers[U]
     }
 
     /// Diagnostics: the IR vectors of the last bounce (receivers × `b²` × rgb with
-    /// `b` = [`u_bands`], as f32 whatever `gi.storage`), read back (waits). Call after a
+    /// `b` = [`u_bands`](crate::rules::scene::u_bands), as f32 whatever `gi.storage`), read back (waits). Call after a
     /// recorded frame completed.
     pub fn read_u(&self, ctx: &Context) -> Result<Vec<f32>> {
         let values = 3 * self.u_coefficients;

@@ -202,9 +202,8 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
 /// (`shade.direct`, `next_stride = None`) or its indirect mode (`indirect.shade`:
 /// `Some(floats per channel of the radiance levels buffer)`, where it writes the next bounce's
 /// input).
-/// The indirect mode reads `U`'s first [`u_bands`](crate::rules::scene::u_bands) bands.
+/// The indirect mode reads `U`'s [`u_coefficients`](crate::rules::scene::u_coefficients).
 pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 8] {
-    let b = crate::rules::scene::u_bands(scene) as u32;
     [
         (0, scene.gi.sh_order as u32),
         (1, next_stride.is_some() as u32),
@@ -213,7 +212,7 @@ pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 8] {
         (4, scene.gi.storage.spec()),
         (5, glossy_planes(scene) as u32),
         (6, next_stride.unwrap_or(0)),
-        (7, b * b),
+        (7, crate::rules::scene::u_coefficients(scene) as u32),
     ]
 }
 

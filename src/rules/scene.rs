@@ -53,6 +53,13 @@ pub fn u_bands(scene: &Scene) -> usize {
     zh.iter().rposition(|z| *z != 0.0).map_or(n, |l| l + 1)
 }
 
+/// Coefficients per RGB channel of the stored `U`: [`u_bands`]² (the scan's and the shade's
+/// `HFGI_NU`; a receiver's values are 3 × this).
+pub fn u_coefficients(scene: &Scene) -> usize {
+    let b = u_bands(scene);
+    b * b
+}
+
 #[cfg(test)]
 mod tests {
     use super::u_bands;
