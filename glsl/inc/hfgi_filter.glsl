@@ -1,6 +1,7 @@
 // hfgi — software bilinear and cubic B-spline sampling of pyramid levels stored in a float
 // buffer. The includer declares, before including this file:
 //     layout(std430, binding = N) readonly buffer ... { float hfgi_levels[]; };
+// or, with HFGI_TEXELS defined, `layout(binding = N) uniform usamplerBuffer hfgi_levels_texels;`.
 // A shader that reads two pyramids (heights and radiance) defines instead
 //     #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
 // Coordinates are in the level's texel units with texel centres at integers.
@@ -9,8 +10,18 @@
 #include "hfgi_shared.glsl"
 #include "hfgi_address.glsl"
 
+// Value i of a buffer read through a texel view of 32-bit words (`usamplerBuffer`, a float's
+// bits). lavapipe gathers texel fetches on its SIMD lanes but reads a storage buffer lane by
+// lane, with a branch per lane: the scanning shaders read what they read per sample this way
+// (docs/performance.md §17). An includer that defines HFGI_TEXELS declares
+// `uniform usamplerBuffer hfgi_levels_texels` instead of the `hfgi_levels` storage buffer.
+#define HFGI_TEXEL_F(t, i) uintBitsToFloat(texelFetch(t, int(i)).x)
 #ifndef HFGI_LEVEL_READ
+#ifdef HFGI_TEXELS
+#define HFGI_LEVEL_READ(l, i) HFGI_TEXEL_F(hfgi_levels_texels, i)
+#else
 #define HFGI_LEVEL_READ(l, i) hfgi_levels[i]
+#endif
 #endif
 
 float hfgi_fetch(hfgi_Level l, ivec2 p, bool wrap) {

@@ -1,11 +1,22 @@
 // hfgi — height lookups in the pyramid, the way every scanning pass does them.
 // The includer declares `float hfgi_levels[]`, `hfgi_Level hfgi_table[]`, `float hfgi_stack[]`
 // and `uvec4 hfgi_hplanes[]` (in pyramid mode, bind the levels buffer as the stack and any
-// buffer as the planes), then includes this file.
+// buffer as the planes), or with HFGI_TEXELS their texel views (below), then includes this file.
 // Positions are in level-0 texel units.
 #ifndef HFGI_PYRAMID_GLSL
 #define HFGI_PYRAMID_GLSL
 #include "hfgi_filter.glsl"
+
+// How a height-stack value and a plane's entry are read: with HFGI_TEXELS (hfgi_filter.glsl)
+// through texel views, `uniform usamplerBuffer hfgi_stack_texels` (f32 bits) and
+// `hfgi_hplanes_texels` (uvec4), which the includer declares instead of the storage buffers.
+#ifdef HFGI_TEXELS
+#define HFGI_STACK_AT(i) HFGI_TEXEL_F(hfgi_stack_texels, i)
+#define HFGI_HPLANE(i) texelFetch(hfgi_hplanes_texels, int(i))
+#else
+#define HFGI_STACK_AT(i) hfgi_stack[i]
+#define HFGI_HPLANE(i) hfgi_hplanes[i]
+#endif
 
 // Bilinear value of height-stack plane `plane` at level-0 position p0. The planes' sizes and
 // offsets come from `uvec4 hfgi_hplanes[]`, which the includer declares (PyramidLayout::
@@ -13,7 +24,7 @@
 // it keeps the level's texels). The radiance stack has its own planes table
 // (glsl/indirect/scan.comp.glsl reads it).
 float hfgi_stack_bilinear(uint plane, vec2 p0, vec2 n0, bool wrap) {
-    uvec4 pl = hfgi_hplanes[plane];
+    uvec4 pl = HFGI_HPLANE(plane);
     vec2 pw = (p0 + 0.5) * vec2(pl.xy) / n0 - 0.5;
     vec2 fl = floor(pw);
     vec2 f = pw - fl;
@@ -22,7 +33,7 @@ float hfgi_stack_bilinear(uint plane, vec2 p0, vec2 n0, bool wrap) {
     uint x0 = uint(hfgi_address(i.x, w, wrap)), x1 = uint(hfgi_address(i.x + 1, w, wrap));
     uint r0 = pl.z + uint(hfgi_address(i.y, h, wrap)) * pl.x;
     uint r1 = pl.z + uint(hfgi_address(i.y + 1, h, wrap)) * pl.x;
-    return hfgi_bilerp(hfgi_stack[r0 + x0], hfgi_stack[r0 + x1], hfgi_stack[r1 + x0], hfgi_stack[r1 + x1], f);
+    return hfgi_bilerp(HFGI_STACK_AT(r0 + x0), HFGI_STACK_AT(r0 + x1), HFGI_STACK_AT(r1 + x0), HFGI_STACK_AT(r1 + x1), f);
 }
 
 // Flags of hfgi_VisibilityPush.flags / hfgi_IndirectPush.flags (docs/accuracy.md §4; the Rust
@@ -33,6 +44,11 @@ const uint HFGI_FLAG_TANGENT = 4u; // ω_min = the exact tangent elevation, not 
 const uint HFGI_FLAG_ACCUMULATE = 8u; // add to the output (a later azimuth chunk of the same set)
 const uint HFGI_FLAG_MAX_BOUND = 16u; // the indirect scan skips what the max pyramid rules out
 const uint HFGI_FLAG_SWEEP = 32u; // visibility: ω_max from the line sweep's horizons, no scan
+// The height (radiance) stack's plane 0 holds level 0's own values (HeightPyramid::
+// set_raw_plane0): with HFGI_FLAG_RAW_LEVEL0, level 0 is read through the stack like every other
+// level, one read path per sample (docs/performance.md §17).
+const uint HFGI_FLAG_RAW_PLANE0 = 64u;
+const uint HFGI_FLAG_RAW_RPLANE0 = 128u;
 // Flags that change between the dispatches of one pipeline (frame::shared::DYNAMIC_FLAGS). The
 // others, and the storage mode and wrap, are fixed at pipeline creation: the scanning shaders
 // take them from specialization constants (frame::shared::static_modes), because lavapipe runs
@@ -62,7 +78,7 @@ struct hfgi_Scan {
     float texel_size;
     bool stack_mode;
     bool wrap;
-    bool raw0;        // HFGI_FLAG_RAW_LEVEL0
+    bool raw0;        // HFGI_FLAG_RAW_LEVEL0, read from level 0 itself (not through a raw plane 0)
     int first;        // first sample index: −near_steps (sub-texel samples, docs/accuracy.md §4)
     int end;          // one past the last: n_v + far_steps (samples beyond max(W, H) texels)
     hfgi_Level l0;    // hfgi_table[0], read once per receiver
@@ -99,7 +115,8 @@ hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias,
     vec2 n0 = vec2(float(l0.width), float(l0.height));
     vec2 p = (vec2(r) + 0.5) * n0 / vec2(work) - 0.5;
     return hfgi_Scan(p, n0, level_step, level_bias, texel_size, stack_mode, wrap,
-                     (flags & HFGI_FLAG_RAW_LEVEL0) != 0u, -int(extent & 0xffffu), n_v + int(extent >> 16), l0);
+                     (flags & (HFGI_FLAG_RAW_LEVEL0 | HFGI_FLAG_RAW_PLANE0)) == HFGI_FLAG_RAW_LEVEL0,
+                     -int(extent & 0xffffu), n_v + int(extent >> 16), l0);
 }
 
 // The near-field limit t → 0 of the blocking angle (with near_steps > 0; docs/accuracy.md §4):

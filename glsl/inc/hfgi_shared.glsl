@@ -25,6 +25,7 @@ struct hfgi_PyramidPush {
     uint out_width; // working resolution of the stack / probe query count; decimate: levels per channel
     uint out_height;
     float scale;    // synthesize into an f16 stack: the pre-exposure its values are stored at (hfgi_store.glsl)
+    uint flags;     // synthesize: 1 = plane 0 holds level 0's own values (raw plane 0)
 };
 
 // Push constants of the visibility pass (one dispatch per light set). 64 bytes.

@@ -25,17 +25,20 @@ layout(constant_id = 9) const uint HFGI_BOUND = 1u;
 // Coefficients of U stored and so accumulated (rules::scene::u_bands²): n², or only the bands a
 // diffuse surface's clamped-cosine lobe does not zero (order 4: 9), docs/indirect.md §4.
 layout(constant_id = 10) const int HFGI_NU = 16;
+// 0: the pipeline of bounces without radial probes: the probes' code (a division and a ceil per
+// sample, and their loop state) is compiled out (docs/performance.md §17).
+layout(constant_id = 11) const uint HFGI_PROBES = 1u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
-layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
+layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels; // the height levels (f32 bits), a texel buffer
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
-layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
-layout(std430, binding = 3) readonly buffer RLevels { float hfgi_radiance_levels[]; };
+layout(binding = 2) uniform usamplerBuffer hfgi_stack_texels; // the height stack (f32 bits), a texel buffer
+layout(binding = 3) uniform usamplerBuffer hfgi_radiance_levels_texels; // radiance levels (f32 bits)
 layout(std430, binding = 4) readonly buffer RTable { hfgi_Level hfgi_radiance_table[]; };
-layout(std430, binding = 5) readonly buffer RStack { uint hfgi_radiance_stack[]; }; // gi.storage (hfgi_store.glsl)
-layout(std430, binding = 6) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ
-layout(std430, binding = 7) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE
-layout(std430, binding = 8) readonly buffer RLevel { uint hfgi_radiance_level[]; }; // per scan sample, from `first`
+layout(binding = 5) uniform usamplerBuffer hfgi_radiance_stack_texels; // words of gi.storage (hfgi_store.glsl)
+layout(binding = 6) uniform usamplerBuffer hfgi_samples_texels; // cos φ, sin φ, 0, 0 (f32 bits)
+layout(binding = 7) uniform usamplerBuffer hfgi_fold_texels; // A_j: n² × NE (f32 bits)
+layout(binding = 8) uniform usamplerBuffer hfgi_radiance_level_texels; // per scan sample, from `first`
 layout(std430, binding = 9) buffer U { uint hfgi_u[]; };                      // receivers × n² × rgb, over azimuth chunks (hfgi_store.glsl)
 layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
     float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER];
@@ -43,15 +46,28 @@ layout(std430, binding = 10) readonly buffer Consts {                         //
     float hfgi_zh_glossy[HFGI_MAX_SH_ORDER]; // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
-layout(std430, binding = 11) readonly buffer Max { float hfgi_max[]; };           // pyramid.max (with the bound)
+layout(binding = 11) uniform usamplerBuffer hfgi_max_texels; // pyramid.max (f32 bits; with the bound)
 // The radiance stack's planes (stack mode): width, height, offset per level of channel 0, then
 // the channel stride (PyramidLayout::stack_planes: coarse planes are smaller than the working grid).
-layout(std430, binding = 12) readonly buffer RPlanes { uvec4 hfgi_rplanes[]; };
+layout(binding = 12) uniform usamplerBuffer hfgi_rplanes_texels;
 // The height stack's planes (hfgi_pyramid.glsl; stack mode).
-layout(std430, binding = 13) readonly buffer HPlanes { uvec4 hfgi_hplanes[]; };
+layout(binding = 13) uniform usamplerBuffer hfgi_hplanes_texels;
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
-#define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? hfgi_levels[i] : hfgi_radiance_levels[i])
+// What the scan reads per sample or per member it reads through texel views (HFGI_TEXELS,
+// hfgi_filter.glsl; docs/performance.md §17); only what it reads per receiver or writes is a
+// storage buffer.
+#define HFGI_TEXELS
+#define HFGI_TEXEL_F(t, i) uintBitsToFloat(texelFetch(t, int(i)).x)
+#define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? HFGI_TEXEL_F(hfgi_levels_texels, i) : HFGI_TEXEL_F(hfgi_radiance_levels_texels, i))
+#define hfgi_radiance_levels(i) HFGI_TEXEL_F(hfgi_radiance_levels_texels, i)
+#define hfgi_rplanes(i) texelFetch(hfgi_rplanes_texels, int(i))
+#define hfgi_max(i) HFGI_TEXEL_F(hfgi_max_texels, i)
 #include "hfgi_store.glsl"
+// Value i of the radiance stack's words (HFGI_LOAD's layout, through the texel view).
+float rstack_at(uint i) {
+    if (HFGI_HALF != 0u) return unpackHalf2x16(texelFetch(hfgi_radiance_stack_texels, int(i >> 1u)).x)[i & 1u];
+    return uintBitsToFloat(texelFetch(hfgi_radiance_stack_texels, int(i)).x);
+}
 // With f16 the radiance stack holds radiance × pc.radiance_scale (the pre-exposure,
 // frame::storage::pre_exposure): its reads divide by it, and U is stored times it.
 float hfgi_unexpose;
@@ -89,7 +105,7 @@ void radiance_begin() {
 float max_begin(uvec2 n0) {
     hfgi_max_levels = hfgi_max_count(n0);
     for (uint l = 0u; l < hfgi_max_levels; ++l) hfgi_max_ov[l] = hfgi_max_offset(n0, l, true);
-    return hfgi_max[hfgi_max_ov[hfgi_max_levels - 1u]];
+    return hfgi_max(hfgi_max_ov[hfgi_max_levels - 1u]);
 }
 
 // An upper bound of the bilinear level-0 surface over the segment a–b (hfgi_max.glsl): the ov
@@ -100,7 +116,7 @@ float max_over(vec2 a, vec2 b, uvec2 n0) {
     uint level = min(e <= 1u ? 0u : uint(findMSB(e - 1u)) + 1u, hfgi_max_levels - 1u);
     uvec2 s = hfgi_max_size(n0, level);
     ivec2 c = clamp(ivec2(floor(lo / float(1u << level))), ivec2(0), ivec2(s) - 1);
-    return hfgi_max[hfgi_max_ov[level] + uint(c.y) * s.x + uint(c.x)];
+    return hfgi_max(hfgi_max_ov[level] + uint(c.y) * s.x + uint(c.x));
 }
 
 // CONVENTIONS.md height gradient at texel (i, j) of level 0 (one-sided at the border, periodic
@@ -142,7 +158,7 @@ vec3 radiance_rgb(uint lv, vec2 q, bool stack_mode, bool wrap, bool raw) {
         }
         return rad;
     }
-    uvec4 plane = raw ? uvec4(0u) : hfgi_rplanes[lv];
+    uvec4 plane = raw ? uvec4(0u) : hfgi_rplanes(lv);
     ivec2 size = raw ? hfgi_r0_size : ivec2(plane.xy);
     vec2 pw = (q + 0.5) * (raw ? hfgi_r0_raw_scale : vec2(plane.xy) / vec2(hfgi_r0_size)) - 0.5;
     vec2 fl = floor(pw);
@@ -155,12 +171,12 @@ vec3 radiance_rgb(uint lv, vec2 q, bool stack_mode, bool wrap, bool raw) {
         if (raw) {
             uvec4 k = at + hfgi_r0_offset[c];
             float b = hfgi_r0_bias[c];
-            rad[c] = hfgi_bilerp(hfgi_radiance_levels[k.x] - b, hfgi_radiance_levels[k.y] - b,
-                                 hfgi_radiance_levels[k.z] - b, hfgi_radiance_levels[k.w] - b, f);
+            rad[c] = hfgi_bilerp(hfgi_radiance_levels(k.x) - b, hfgi_radiance_levels(k.y) - b,
+                                 hfgi_radiance_levels(k.z) - b, hfgi_radiance_levels(k.w) - b, f);
         } else {
-            uvec4 k = at + c * hfgi_rplanes[pc.radiance_planes].z + plane.z; // lv < radiance_planes
-            rad[c] = hfgi_bilerp(HFGI_LOAD(hfgi_radiance_stack, k.x), HFGI_LOAD(hfgi_radiance_stack, k.y),
-                                 HFGI_LOAD(hfgi_radiance_stack, k.z), HFGI_LOAD(hfgi_radiance_stack, k.w), f);
+            uvec4 k = at + c * hfgi_rplanes(pc.radiance_planes).z + plane.z; // lv < radiance_planes
+            rad[c] = hfgi_bilerp(rstack_at(k.x), rstack_at(k.y),
+                                 rstack_at(k.z), rstack_at(k.w), f);
             if (HFGI_HALF != 0u) rad[c] *= hfgi_unexpose;
         }
     }
@@ -170,7 +186,11 @@ vec3 radiance_rgb(uint lv, vec2 q, bool stack_mode, bool wrap, bool raw) {
 // Exit radiance of casting point q toward the receiver (docs/indirect.md §2): the diffuse RGB
 // pyramid, plus in vector mode k_s · ⟨T(q), Phong ZH rotated to R⟩ with R the reflection of the
 // direction back to the receiver about q's normal.
-// With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image.
+// With HFGI_FLAG_RAW_LEVEL0 (raw0) radiance level 0 is read as the unfiltered bilinear image:
+// from level 0 itself, or with HFGI_FLAG_RAW_RPLANE0 from the stack's plane 0, which then holds
+// it (hfgi_radiance_raw0 is false: one read path).
+const bool hfgi_radiance_raw0 =
+    (HFGI_STATIC_FLAGS & (HFGI_FLAG_RAW_LEVEL0 | HFGI_FLAG_RAW_RPLANE0)) == HFGI_FLAG_RAW_LEVEL0;
 vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, bool stack_mode, bool wrap, bool raw0) {
     bool raw = raw0 && lv == 0u;
     hfgi_Level r0 = hfgi_radiance_table[0];
@@ -202,10 +222,10 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, bool stack_mode, bool
 void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running_slope, float slope, int i, vec2 q,
                  vec2 d, hfgi_Scan scan, bool wrap) {
     float omega = atan(slope);
-    uint rl = hfgi_radiance_level[i - scan.first];
+    uint rl = texelFetch(hfgi_radiance_level_texels, i - scan.first).x;
     float seg[HFGI_NE];
     hfgi_elevation(running, omega, seg);
-    vec3 rad = member_radiance(rl, q, omega, d, HFGI_RSTACK != 0u, wrap, scan.raw0);
+    vec3 rad = member_radiance(rl, q, omega, d, HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0);
     for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
     running = omega;
     running_slope = slope;
@@ -262,7 +282,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
                     float m = max_over(scan.p + t_prev * d, q, uvec2(scan.n0)) - hfgi_base[0];
                     clear = m <= running_slope * (m > 0.0 ? t_prev : t) * scan.texel_size;
                 }
-                np = clear ? 0 : clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
+                np = clear || HFGI_PROBES == 0u ? 0 : clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
                 s2 = 1;
                 if (clear && lv == 0u) {
                     t_prev = t;
@@ -271,8 +291,8 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
                     continue;
                 }
             }
-            bool probe = s2 <= np;
-            float tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
+            bool probe = HFGI_PROBES != 0u && s2 <= np;
+            float tp = HFGI_PROBES == 0u ? t : probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
             qp = scan.p + tp * d;
             uint lq = probe ? 0u : lv;
             sp = (hfgi_height_at(scan, lq, qp) - hfgi_base[lq]) / (tp * scan.texel_size);
@@ -316,7 +336,7 @@ void main() {
     hfgi_unexpose = 1.0 / pc.radiance_scale;
     for (int k = 0; k < HFGI_NU; ++k) hfgi_U[k] = vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
-        vec2 d = hfgi_samples[j].xy;
+        vec2 d = uintBitsToFloat(texelFetch(hfgi_samples_texels, int(j)).xy);
         // ω_min: the tangent plane of the receiver along φ (§3): the paper's −asin(N·d), or the
         // exact tangent elevation atan2(−N·d, N_z) (CONVENTIONS.md; docs/accuracy.md §4).
         float running = tangent ? atan(-dot(N.xy, d), N.z) : -asin(clamp(dot(N.xy, d), -1.0, 1.0));
@@ -330,7 +350,7 @@ void main() {
         if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running + 1e-5) {
             float seg[HFGI_NE];
             hfgi_elevation(running, limit, seg);
-            vec3 rad = member_radiance(0u, scan.p, limit, d, HFGI_RSTACK != 0u, wrap, scan.raw0);
+            vec3 rad = member_radiance(0u, scan.p, limit, d, HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0);
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }
@@ -339,7 +359,7 @@ void main() {
         uint base = j * uint(HFGI_N2 * HFGI_NE);
         for (int k = 0; k < HFGI_NU; ++k) {
             vec3 acc = vec3(0.0);
-            for (int l = 0; l < HFGI_NE; ++l) acc += hfgi_fold[base + uint(k * HFGI_NE + l)] * u[l];
+            for (int l = 0; l < HFGI_NE; ++l) acc += HFGI_TEXEL_F(hfgi_fold_texels, base + uint(k * HFGI_NE + l)) * u[l];
             hfgi_U[k] += acc;
         }
     }

@@ -15,18 +15,25 @@
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const uint HFGI_HALF = 0u;
-layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
+// The levels (16 reads per B-spline value) and the planes through texel views (HFGI_TEXELS,
+// hfgi_filter.glsl; docs/performance.md §17).
+#define HFGI_TEXELS
+layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels;
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(std430, binding = 2) writeonly buffer Stack { uint hfgi_stack[]; };
-layout(std430, binding = 3) readonly buffer Planes { uvec4 hfgi_planes[]; }; // width, height, offset, 0
+layout(binding = 3) uniform usamplerBuffer hfgi_planes_texels; // width, height, offset, 0
+#define hfgi_planes(i) texelFetch(hfgi_planes_texels, int(i))
 layout(push_constant) uniform Push { hfgi_PyramidPush pc; };
 #include "hfgi_filter.glsl"
 #include "hfgi_store.glsl"
 
-// The value of stack plane `plane_index` (of size `size`) at texel p.
+// The value of stack plane `plane_index` (of size `size`) at texel p. With pc.flags & 1 (raw
+// plane 0, HeightPyramid::set_raw_plane0) plane 0 of each channel has level 0's size and holds
+// its own values, relative to its bias as hfgi_fetch reads them; the others the B-spline.
 float hfgi_synthesized(uint plane_index, uvec2 p, uvec2 size) {
     uint kept = pc.level & 0xffffu, n_v = pc.level >> 16;
     hfgi_Level l = hfgi_table[(plane_index / kept) * n_v + plane_index % kept];
+    if ((pc.flags & 1u) != 0u && plane_index % kept == 0u) return hfgi_fetch(l, ivec2(p), pc.wrap != 0u);
     vec2 s = hfgi_rescale(vec2(p), vec2(size), l);
     return hfgi_bspline_at(l, s, pc.wrap != 0u);
 }
@@ -35,17 +42,17 @@ void main() {
     uint z = gl_GlobalInvocationID.z;
     uvec2 p = gl_GlobalInvocationID.xy;
     uint kept = pc.level & 0xffffu;
-    uvec4 plane = hfgi_planes[z % kept];
+    uvec4 plane = hfgi_planes(z % kept);
     uvec2 size = plane.xy;
     if (p.x >= size.x || p.y >= size.y) return;
     uint t = p.y * size.x + p.x;
-    uint i = (z / kept) * hfgi_planes[kept].z + plane.z + t;
+    uint i = (z / kept) * hfgi_planes(kept).z + plane.z + t;
     if (HFGI_HALF == 0u) {
         hfgi_stack[i] = floatBitsToUint(hfgi_synthesized(z, p, size));
         // A decimated plane of odd count is padded by one value: 0, so the buffer's contents
         // are defined (read-backs see every value; the scan never reads the pad).
         uint count = size.x * size.y;
-        if (t + 1u == count && plane.z + count < hfgi_planes[z % kept + 1u].z) hfgi_stack[i + 1u] = 0u;
+        if (t + 1u == count && plane.z + count < hfgi_planes(z % kept + 1u).z) hfgi_stack[i + 1u] = 0u;
     } else if ((i & 1u) == 0u) {
         // Value i + 1: the next texel of the row, else the first of the next row, else padding.
         uvec2 q = p.x + 1u < size.x ? uvec2(p.x + 1u, p.y) : uvec2(0u, p.y + 1u);

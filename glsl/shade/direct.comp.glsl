@@ -33,10 +33,14 @@ layout(constant_id = 6) const uint HFGI_NEXT_STRIDE = 0u; // indirect mode: floa
 layout(constant_id = 7) const int HFGI_NU = 16;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
-layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };     // level 0 = heights
-layout(std430, binding = 1) readonly buffer Vis { uint hfgi_vis[]; };            // sets × receivers × n²; U: receivers × n² × rgb (hfgi_store.glsl)
-layout(std430, binding = 2) readonly buffer Light { vec4 hfgi_light[]; };        // sets × n² (rgb), then per set its cap (key light: dir, α)
-layout(std430, binding = 3) readonly buffer Triple { uvec2 hfgi_triple[]; };     // (i | j<<8 | k<<16, γ bits)
+// Bindings 0–3 are texel views (docs/performance.md §17: lavapipe gathers texel fetches on its
+// SIMD lanes and reads storage buffers lane by lane; the triple loop reads two per entry).
+layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels; // level 0 = heights (f32 bits)
+layout(binding = 1) uniform usamplerBuffer hfgi_vis_texels;    // sets × receivers × n²; U: receivers × n² × rgb (hfgi_store.glsl)
+layout(binding = 2) uniform usamplerBuffer hfgi_light_texels;  // sets × n² (rgb), then per set its cap (key light: dir, α)
+layout(binding = 3) uniform usamplerBuffer hfgi_triple_texels; // (i | j<<8 | k<<16, γ bits)
+#define hfgi_light(i) uintBitsToFloat(texelFetch(hfgi_light_texels, int(i)))
+#define hfgi_triple(i) texelFetch(hfgi_triple_texels, int(i)).xy
 layout(std430, binding = 4) readonly buffer Albedo { vec4 hfgi_albedo[]; };      // per texel (albedo_map)
 layout(std430, binding = 5) readonly buffer Consts {
     float hfgi_klm[HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER];
@@ -54,6 +58,12 @@ layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_address.glsl"
 #include "hfgi_store.glsl"
 
+// Value i of binding 1's words (HFGI_LOAD's layout, through the texel view).
+float vis_at(uint i) {
+    if (HFGI_HALF != 0u) return unpackHalf2x16(texelFetch(hfgi_vis_texels, int(i >> 1u)).x)[i & 1u];
+    return uintBitsToFloat(texelFetch(hfgi_vis_texels, int(i)).x);
+}
+
 // Texel `at` (plane · W·H + texel) of the shading planes.
 vec3 hfgi_out_get(uint at) {
     return vec3(hfgi_out[3u * at], hfgi_out[3u * at + 1u], hfgi_out[3u * at + 2u]);
@@ -64,7 +74,7 @@ void hfgi_out_set(uint at, vec3 v) {
 }
 
 float height(int x, int y) {
-    return hfgi_levels[uint(y) * pc.width + uint(x)];
+    return uintBitsToFloat(texelFetch(hfgi_levels_texels, int(uint(y) * pc.width + uint(x))).x);
 }
 
 int wrap_or_clamp(int p, int n) {
@@ -173,8 +183,8 @@ void main() {
         for (int k = 0; k < HFGI_NU; ++k) {
             for (int c = 0; c < 3; ++c) {
                 uint oc = uint(3 * k + c);
-                hfgi_T[k][c] = w00 * HFGI_LOAD(hfgi_vis, r00 * us + oc) + w10 * HFGI_LOAD(hfgi_vis, r10 * us + oc)
-                             + w01 * HFGI_LOAD(hfgi_vis, r01 * us + oc) + w11 * HFGI_LOAD(hfgi_vis, r11 * us + oc);
+                hfgi_T[k][c] = w00 * vis_at(r00 * us + oc) + w10 * vis_at(r10 * us + oc)
+                             + w01 * vis_at(r01 * us + oc) + w11 * vis_at(r11 * us + oc);
             }
         }
         // With f16, U is stored times the pre-exposure (frame::storage::pre_exposure).
@@ -187,22 +197,22 @@ void main() {
         uint vs = hfgi_stride(HFGI_N2);
         uint base = s * receivers * vs;
         for (int k = 0; k < HFGI_N2; ++k) {
-            hfgi_V[k] = w00 * HFGI_LOAD(hfgi_vis, base + r00 * vs + uint(k)) + w10 * HFGI_LOAD(hfgi_vis, base + r10 * vs + uint(k))
-                      + w01 * HFGI_LOAD(hfgi_vis, base + r01 * vs + uint(k)) + w11 * HFGI_LOAD(hfgi_vis, base + r11 * vs + uint(k));
+            hfgi_V[k] = w00 * vis_at(base + r00 * vs + uint(k)) + w10 * vis_at(base + r10 * vs + uint(k))
+                      + w01 * vis_at(base + r01 * vs + uint(k)) + w11 * vis_at(base + r11 * vs + uint(k));
         }
         uint lbase = s * uint(HFGI_N2);
         bool combined = HFGI_BLOCKERS >= 2u && s == 0u; // log modes: the environment's own vector
         if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11));
         // A key light with gi.blocker_key_lights = "overlap": scaled by the fraction of its cap
         // the spheres leave open, and kept out of the product with V_s.
-        vec4 cap = hfgi_light[pc.set_count * uint(HFGI_N2) + s];
+        vec4 cap = hfgi_light(pc.set_count * uint(HFGI_N2) + s);
         bool key = HFGI_BLOCKERS != 0u && pc.key_overlap != 0u && cap.w > 0.0;
         float open = key ? hfgi_key_open(P, cap.xyz, cap.w) : 1.0;
         // T_k += Σ_ij Γ_ijk L_i V_j (every ordered (i, j, k) is stored).
         for (uint e = 0u; e < hfgi_triple_count; ++e) {
-            uvec2 t = hfgi_triple[e];
+            uvec2 t = hfgi_triple(e);
             uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
-            vec3 add = uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light[lbase + i].rgb;
+            vec3 add = uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light(lbase + i).rgb;
             if (combined) hfgi_T2[k] += add; else if (key) K[k] += open * add; else hfgi_T[k] += add;
         }
     }
@@ -213,7 +223,7 @@ void main() {
         vec3 W[HFGI_N2];
         for (int k = 0; k < HFGI_N2; ++k) W[k] = hfgi_T2[k];
         for (uint e = 0u; e < hfgi_triple_count; ++e) {
-            uvec2 t = hfgi_triple[e];
+            uvec2 t = hfgi_triple(e);
             uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
             W[k] += uintBitsToFloat(t.y) * hfgi_VS[j] * hfgi_T[i];
         }
@@ -235,7 +245,7 @@ void main() {
         for (int l = 0; l < HFGI_N; ++l) {
             for (int m = -l; m <= l; ++m) {
                 int k = l * (l + 1) + m;
-                E += 3.14159265358979 * hfgi_V[k] * hfgi_light[uint(k)].rgb - hfgi_T2[k] * (hfgi_zh_diffuse[l] * hfgi_y[k]);
+                E += 3.14159265358979 * hfgi_V[k] * hfgi_light(uint(k)).rgb - hfgi_T2[k] * (hfgi_zh_diffuse[l] * hfgi_y[k]);
             }
         }
     }
@@ -264,7 +274,7 @@ void main() {
             for (int l = 0; l < HFGI_N; ++l) {
                 for (int m = -l; m <= l; ++m) {
                     int k = l * (l + 1) + m;
-                    G += hfgi_V[k] * hfgi_light[uint(k)].rgb - hfgi_T2[k] * (hfgi_zh_glossy[l] * hfgi_y[k]);
+                    G += hfgi_V[k] * hfgi_light(uint(k)).rgb - hfgi_T2[k] * (hfgi_zh_glossy[l] * hfgi_y[k]);
                 }
             }
         }

@@ -20,14 +20,17 @@ layout(constant_id = 5) const uint HFGI_STATIC_FLAGS = 0u;
 layout(constant_id = 6) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_store.glsl)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
-layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };
+// What is read per sample or per azimuth is read through texel views of 32-bit words
+// (HFGI_TEXELS, hfgi_filter.glsl; docs/performance.md §17).
+#define HFGI_TEXELS
+layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels;
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
-layout(std430, binding = 2) readonly buffer Stack { float hfgi_stack[]; };
-layout(std430, binding = 3) readonly buffer Samples { vec4 hfgi_samples[]; }; // cos φ, sin φ, lo, hi
-layout(std430, binding = 4) readonly buffer Fold { float hfgi_fold[]; };      // A_j: n² × NE, row-major
-layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };                   // accumulated over azimuth chunks (hfgi_store.glsl)
-layout(std430, binding = 6) readonly buffer Horizons { float hfgi_horizons[]; }; // sweep: [sample][receiver][2]
-layout(std430, binding = 7) readonly buffer HPlanes { uvec4 hfgi_hplanes[]; };   // the height stack's planes (hfgi_pyramid.glsl)
+layout(binding = 2) uniform usamplerBuffer hfgi_stack_texels;
+layout(binding = 3) uniform usamplerBuffer hfgi_samples_texels; // cos φ, sin φ, lo, hi (f32 bits)
+layout(binding = 4) uniform usamplerBuffer hfgi_fold_texels;    // A_j: n² × NE, row-major
+layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };    // accumulated over azimuth chunks (hfgi_store.glsl)
+layout(binding = 6) uniform usamplerBuffer hfgi_horizons_texels; // sweep: [sample][receiver][2]
+layout(binding = 7) uniform usamplerBuffer hfgi_hplanes_texels;  // the height stack's planes (hfgi_pyramid.glsl)
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
@@ -131,12 +134,12 @@ void main() {
     for (int k = 0; k < HFGI_N2; ++k) V[k] = 0.0;
 
     for (uint j = 0u; j < pc.sample_count; ++j) {
-        vec4 smp = hfgi_samples[pc.sample_offset + j];
+        vec4 smp = uintBitsToFloat(texelFetch(hfgi_samples_texels, int(pc.sample_offset + j)));
         float wmax;
         if (sweep) {
             // The two lines' weighted horizons (glsl/visibility/sweep.comp.glsl).
             uint h = ((pc.sample_offset + j - pc.horizon_first) * receivers + r.y * pc.work_width + r.x) * 2u;
-            wmax = hfgi_horizons[h] + hfgi_horizons[h + 1u];
+            wmax = HFGI_TEXEL_F(hfgi_horizons_texels, h) + HFGI_TEXEL_F(hfgi_horizons_texels, h + 1u);
             float near;
             if (pc.sweep_near > 0.0 && hfgi_near_slope(scan, smp.xy, pc.sweep_near, near))
                 wmax = max(wmax, atan(near / pc.texel_size));
@@ -150,7 +153,7 @@ void main() {
         uint base = (pc.sample_offset + j) * uint(HFGI_N2 * HFGI_NE);
         for (int k = 0; k < HFGI_N2; ++k) {
             float acc = 0.0;
-            for (int l = 0; l < HFGI_NE; ++l) acc += hfgi_fold[base + uint(k * HFGI_NE + l)] * v[l];
+            for (int l = 0; l < HFGI_NE; ++l) acc += HFGI_TEXEL_F(hfgi_fold_texels, base + uint(k * HFGI_NE + l)) * v[l];
             V[k] += acc;
         }
     }

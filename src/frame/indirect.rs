@@ -21,16 +21,19 @@ use super::pyramid_max::{uses_max_bound, MaxPyramid};
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
 use super::shade::ShadePass;
-use super::shared::{azimuth_chunks, IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND, INDIRECT_LOOP_BUDGET};
+use super::shared::{IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND};
 use crate::error::Result;
-use crate::math::{azimuth, elevation};
+use crate::math::azimuth;
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
 use crate::rules::scene::u_coefficients;
-use crate::scene::model::{PyramidMode, Scene, Storage};
+use crate::scene::model::{Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
-use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
+
+mod scan;
+use scan::{scan_chunks, scan_kinds, scan_pipelines, scan_push, PushGet, ScanKind};
 
 pub const STAGE_SCAN: &str = super::stages::stage_name("indirect.scan");
 pub const STAGE_SHADE: &str = super::stages::stage_name("indirect.shade");
@@ -40,8 +43,8 @@ pub struct IndirectPass {
     /// The max pyramid the scan's bound reads ([`uses_max_bound`]).
     pub max: Option<MaxPyramid>,
     /// The scan's pipelines with their sets, by whether their dispatches use the max-pyramid
-    /// bound ([`bounded`]): one per kind the scene's bounces need.
-    scans: Vec<(bool, ComputePipeline, vk::DescriptorSet)>,
+    /// bound ([`scan::bounded`]): one per kind the scene's bounces need.
+    scans: Vec<(ScanKind, ComputePipeline, vk::DescriptorSet)>,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
     buffers: Vec<Buffer>, // samples, fold, radiance levels, U
@@ -130,110 +133,11 @@ pub(crate) fn buffer_sizes(
     .map(|(name, size)| (name, size.max(16)))
 }
 
-/// The scan's push constants at creation (per dispatch, `record_scan` sets the azimuth chunk,
-/// the probes and the dynamic flags); their modes are also its specialization constants.
-fn scan_push(scene: &Scene, (ww, wh): (u32, u32), sample_count: u32, rad: &RadiancePyramid) -> IndirectPush {
-    let gi = &scene.gi;
-    let k = scene.material.specular.unwrap_or([0.0; 3]);
-    IndirectPush {
-        work_width: ww,
-        work_height: wh,
-        wrap: scene.wrap as u32,
-        level_step: gi.level_step,
-        level_bias: gi.level_step * gi.level_offset,
-        texel_size: scene.texel_size as f32,
-        stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
-        sample_count,
-        radiance_levels: rad.pyramid.layout().count() as u32,
-        radiance_stack: (rad.pyramid.mode() == PyramidMode::Stack) as u32,
-        flags: super::shared::scan_flags(gi),
-        scan_extent: super::shared::scan_extent(gi),
-        specular: [k[0], k[1], k[2], 0.0],
-        sample_offset: 0,
-        probes: gi.probes(1),
-        radiance_planes: rad.pyramid.stack_levels() as u32,
-        radiance_scale: 1.0, // IndirectPass::set_pre_exposure
-    }
-}
-
-/// Whether a bounce's scan reads the max-pyramid bound: the pass has the max pyramid and the
-/// bounce probes. The bound pays where it saves probes; without probes it costs more than it
-/// saves (docs/accuracy.md §4), and its pipeline is then compiled without it (§12 of
-/// docs/performance.md).
-fn bounded(has_max: bool, probes: u32) -> bool {
-    has_max && probes > 0
-}
-
-/// The scan pipelines a scene gets, by [`bounded`]: the first bounce's kind and, when later
-/// bounces differ, theirs (a bounce past `gi.bounces` takes the first, which scans it exactly).
-fn scan_kinds(scene: &Scene, has_max: bool) -> Vec<bool> {
-    let gi = &scene.gi;
-    let first = bounded(has_max, gi.probes(1));
-    let later = gi.bounces > 1 && bounded(has_max, gi.probes(2)) != first;
-    if later {
-        vec![first, !first]
-    } else {
-        vec![first]
-    }
-}
-
-/// The scan's specialization constants (`glsl/indirect/scan.comp.glsl`) for `n_v` height levels
-/// and the creation push `push`: the bound's code compiled in or out with `bound`.
-fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, bound: bool) -> Vec<(u32, u32)> {
-    let gi = &scene.gi;
-    let n = gi.sh_order;
-    let own = [
-        (0, n as u32),
-        (1, n_v as u32),
-        (2, vector_pyramid(scene) as u32),
-        (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
-        (7, push.radiance_stack),
-        (8, gi.storage.spec()),
-        (9, bound as u32),
-        (10, u_coefficients(scene) as u32),
-    ];
-    [&own[..], &super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
-}
-
 /// The shading shader in indirect mode (`indirect.shade`).
 fn shade_pipeline(ctx: &Context, scene: &Scene, next_stride: u32) -> Result<ComputePipeline> {
     let spec = super::shade::spec(scene, Some(next_stride));
     let size = std::mem::size_of::<ShadePush>() as u32;
-    ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &[DescriptorKind::StorageBuffer; 11], size, &spec, 1)
-}
-
-/// Azimuth chunks `(first, count)` of the first bounce's scan and of the later ones' over their
-/// sample sets ([`ScanData::sets`]), against lavapipe's loop limit.
-fn scan_chunks(gi: &crate::scene::model::GiSettings, ladder: usize, sets: [(u32, u32); 2]) -> [Vec<(u32, u32)>; 2] {
-    let (n, e) = (gi.sh_order, elevation::gpu_size(gi.elevation_basis, gi.sh_order));
-    [(gi.probes(1), sets[0]), (gi.probes(2), sets[1])].map(|(p, (first, count))| {
-        // A member adds an outer iteration of the scan's while-while loop and an e-vector.
-        let cost = ladder * (1 + p as usize) * (e + 1) + n * n * e;
-        let chunks = azimuth_chunks(count, cost as u32, INDIRECT_LOOP_BUDGET);
-        chunks.into_iter().map(|(f, c)| (first + f, c)).collect()
-    })
-}
-
-/// The scan's pipelines of `kinds` (pushed to `pipes`, which owns them on every exit) and their
-/// descriptor sets over `binds`.
-fn scan_pipelines(
-    ctx: &Context,
-    scene: &Scene,
-    n_v: usize,
-    push: &IndirectPush,
-    kinds: &[bool],
-    binds: &[Bind],
-    pipes: &mut Vec<ComputePipeline>,
-) -> Result<Vec<vk::DescriptorSet>> {
-    let mut sets = Vec::new();
-    for &bound in kinds {
-        let spec = scan_spec(scene, n_v, push, bound);
-        let size = std::mem::size_of::<IndirectPush>() as u32;
-        let kinds = [DescriptorKind::StorageBuffer; 14];
-        let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &kinds, size, &spec, 1)?;
-        sets.push(pipes.push_get(scan).allocate_set(ctx, binds)?);
-    }
-    Ok(sets)
+    ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &super::shade::BINDINGS, size, &spec, 1)
 }
 
 /// The indirect shade's pipeline (pushed last to `pipes`) and its descriptor set: `U` in, the
@@ -254,10 +158,10 @@ fn shade_set(
     sh.allocate_set(
         ctx,
         &[
-            Bind::Buffer(pyramid.levels_buffer()),
-            Bind::Buffer(u),
-            Bind::Buffer(light),
-            Bind::Buffer(triple),
+            Bind::Texel(pyramid.levels_buffer()),
+            Bind::Texel(u),
+            Bind::Texel(light),
+            Bind::Texel(triple),
             Bind::Buffer(albedo),
             Bind::Buffer(consts),
             Bind::Buffer(output),
@@ -299,6 +203,16 @@ fn radiance_pyramid(
 
 const U: usize = 3;
 
+/// The texel views of the scan's own buffers ([`buffer_sizes`]' order): the samples are
+/// `uvec4`s, the fold matrices, the radiance levels and `U` (which the scan writes as a storage
+/// buffer and the indirect shade reads through the view) 32-bit words.
+const BUFFER_VIEWS: [Option<vk::Format>; 4] = [
+    Some(vk::Format::R32G32B32A32_UINT),
+    Some(vk::Format::R32_UINT),
+    Some(vk::Format::R32_UINT),
+    Some(vk::Format::R32_UINT),
+];
+
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
     /// bounce's incident radiance is multiplied by it, docs/blockers.md §4).
@@ -315,6 +229,7 @@ impl IndirectPass {
         let levels = data.radiance_levels(scene)?;
         let ScanData { samples, fold, ladder, sets } = data;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let mut bufs: Vec<Buffer> = Vec::new();
@@ -324,11 +239,21 @@ impl IndirectPass {
         let has_max = uses_max_bound(scene);
         let kinds = scan_kinds(scene, has_max);
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
-            for (name, size) in buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len()) {
-                bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
+            let sizes = buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len());
+            for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
+                let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
+                bufs.push(match view {
+                    Some(format) => b.with_texel_view(ctx, format)?,
+                    None => b,
+                });
             }
             let rad = radiance.insert(radiance_pyramid(ctx, scene, (ww as usize, wh as usize), &levels, shade)?);
-            let push = scan_push(scene, (ww, wh), sets[0].1, rad);
+            // Radiance level 0 read as the bilinear image through the stack too (with f16 storage
+            // rounded to halves like every other plane of the stack; docs/performance.md §17).
+            let raw0 = gi.level0 == crate::scene::model::Level0::Bilinear;
+            let rplane = rad.pyramid.set_raw_plane0(raw0);
+            let raw_planes = super::shared::raw_plane_flags(pyramid.raw_plane0(), rplane);
+            let push = scan_push(scene, (ww, wh), sets[0].1, rad, raw_planes);
             let layout = pyramid.layout();
             if has_max {
                 max = Some(MaxPyramid::new(ctx, pyramid)?);
@@ -340,22 +265,22 @@ impl IndirectPass {
             let consts = shade.bindings()[3];
             let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
             let binds = [
-                Bind::Buffer(pyramid.levels_buffer()),
+                Bind::Texel(pyramid.levels_buffer()),
                 Bind::Buffer(pyramid.table_buffer()),
-                Bind::Buffer(hstack),
-                Bind::Buffer(rad.pyramid.levels_buffer()),
+                Bind::Texel(hstack),
+                Bind::Texel(rad.pyramid.levels_buffer()),
                 Bind::Buffer(rad.pyramid.table_buffer()),
-                Bind::Buffer(rstack),
-                Bind::Buffer(&bufs[0]),
-                Bind::Buffer(&bufs[1]),
-                Bind::Buffer(&bufs[2]),
+                Bind::Texel(rstack),
+                Bind::Texel(&bufs[0]),
+                Bind::Texel(&bufs[1]),
+                Bind::Texel(&bufs[2]),
                 Bind::Buffer(&bufs[U]),
                 Bind::Buffer(consts),
-                // Without the bound the scan never reads binding 11: any buffer.
-                Bind::Buffer(max.as_ref().map_or(&bufs[0], |m: &MaxPyramid| m.buffer())),
-                // Pyramid mode has no stack and no planes: any buffer.
-                Bind::Buffer(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
-                Bind::Buffer(pyramid.height_planes()),
+                // Without the bound the scan never reads binding 11: any view of 32-bit words.
+                Bind::Texel(max.as_ref().map_or(&bufs[1], |m: &MaxPyramid| m.buffer())),
+                // Pyramid mode has no stack and no planes: any view of uvec4s.
+                Bind::Texel(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
+                Bind::Texel(pyramid.height_planes()),
             ];
             let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
             let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;
@@ -436,10 +361,15 @@ impl IndirectPass {
     /// `indirect.scan`).
     pub fn record_scan(&self, rec: &mut Recorder, bounce: u32) {
         let probes = self.probes[(bounce > 1) as usize];
-        let bound = bounded(self.max.is_some(), probes);
-        // The pipeline of this kind; the first otherwise (never, as created): an unbounded
-        // pipeline ignores the flag and a bounded one without it scans unbounded, both exactly.
-        let (_, scan, set) = self.scans.iter().find(|s| s.0 == bound).unwrap_or(&self.scans[0]);
+        let kind = ScanKind::of(self.max.is_some(), probes);
+        let bound = kind.bound;
+        // The pipeline of this kind, else one that serves it exactly (scan_kinds creates one).
+        let (_, scan, set) = self
+            .scans
+            .iter()
+            .find(|s| s.0 == kind)
+            .or_else(|| self.scans.iter().find(|s| s.0.serves(kind)))
+            .unwrap_or(&self.scans[0]);
         rec.scope(STAGE_SCAN, |ctx, cmd| {
             let g = [
                 groups(self.push.work_width, crate::constants::WORKGROUP),
@@ -513,16 +443,5 @@ impl IndirectPass {
         if let Some(m) = self.max.take() {
             m.destroy(ctx);
         }
-    }
-}
-
-trait PushGet<T> {
-    fn push_get(&mut self, v: T) -> &mut T;
-}
-
-impl<T> PushGet<T> for Vec<T> {
-    fn push_get(&mut self, v: T) -> &mut T {
-        self.push(v);
-        self.last_mut().expect("just pushed")
     }
 }

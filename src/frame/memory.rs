@@ -214,6 +214,26 @@ fn texel_bytes(format: vk::Format) -> Result<u64> {
     }
 }
 
+/// Name endings of the buffers read through texel views (checked against
+/// `maxTexelBufferElements`): both pyramids' levels, tables, stacks and planes, the max
+/// pyramid, the scans' samples, fold matrices, radiance-level ladder and swept horizons, `V`,
+/// `U`, and the shading's light and triple table.
+const TEXEL_VIEWED: [&str; 13] = [
+    ".levels",
+    ".table",
+    ".stack",
+    ".planes",
+    ".max",
+    ".samples",
+    ".fold",
+    ".radiance_level",
+    ".horizons",
+    "visibility.v",
+    "indirect.u",
+    ".light",
+    ".triple",
+];
+
 /// `render`'s and `plan`'s checks of a scene against a device, before any GPU work (docs/
 /// robustness.md, "Early, consistent checks"): the field within `maxImageDimension2D`, and the
 /// renderer's and the view pass's memory ([`renderer`], [`view()`] with the default options)
@@ -253,6 +273,17 @@ pub fn check_fits(estimate: &MemoryEstimate, info: &crate::vk::DeviceInfo) -> Re
                 mib(u64::from(info.max_storage_buffer_range)),
                 info.name
             ),
+        ));
+    }
+    // The buffers the scanning passes read through texel views of 32-bit words (or of uvec4s,
+    // fewer texels): `Buffer::with_texel_view`, docs/performance.md §17.
+    let texel = |n: &str| TEXEL_VIEWED.iter().any(|t| n.ends_with(t));
+    let max_texels = u64::from(info.max_texel_buffer_elements);
+    if let Some((name, b)) = storage.clone().find(|(n, b)| texel(n) && *b / 4 > max_texels) {
+        return Err(Error::param(
+            format!("GPU buffer {name}"),
+            format!("{} texels", b / 4),
+            format!("at most {max_texels} (maxTexelBufferElements of {}); {how}", info.name),
         ));
     }
     let cap = info.max_memory_allocation_size;

@@ -200,6 +200,8 @@ pub struct HeightPyramid {
     origin: f32,
     /// The pre-exposure of an f16 stack (its synthesis stores values times it; 1 with f32).
     stack_scale: f32,
+    /// Plane 0 of the stack holds level 0's own values ([`HeightPyramid::set_raw_plane0`]).
+    raw_plane0: bool,
     mode: PyramidMode,
     wrap: bool,
     work: (u32, u32),
@@ -252,26 +254,23 @@ impl HeightPyramid {
         let layout = sizes.layout.clone();
         let table_entries = table_entries(&layout, kind, 0.0);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let (mut levels, mut table, mut stack, mut planes) = (None, None, None, None);
         let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
         let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
         let made = (|| -> Result<()> {
-            let lv = levels.insert(Buffer::new(
-                ctx,
-                &buffer_name(kind, "levels"),
-                sizes.levels,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?);
-            let tb = table.insert(Buffer::new(
-                ctx,
-                &buffer_name(kind, "table"),
-                sizes.table,
-                storage,
-                MemoryLocation::GpuOnly,
-            )?);
+            // Texel views: the scan reads the stack and its planes through them, and in pyramid
+            // mode (no stack) binds the levels and the table in their place.
+            let lv = levels.insert(
+                Buffer::new(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, MemoryLocation::GpuOnly)?
+                    .with_texel_view(ctx, vk::Format::R32_UINT)?,
+            );
+            let tb = table.insert(
+                Buffer::new(ctx, &buffer_name(kind, "table"), sizes.table, storage, MemoryLocation::GpuOnly)?
+                    .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
+            );
             memory::upload(ctx, tb, 0, bytemuck::cast_slice(&table_entries))?;
             let d = decimate.insert(ComputePipeline::new(
                 ctx,
@@ -283,32 +282,31 @@ impl HeightPyramid {
             )?);
             sets.0 = d.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb)])?;
             if let Some(stack_bytes) = sizes.stack {
-                let st = stack.insert(Buffer::new(
-                    ctx,
-                    &buffer_name(kind, "stack"),
-                    stack_bytes,
-                    storage,
-                    MemoryLocation::GpuOnly,
-                )?);
+                let st = stack.insert(
+                    Buffer::new(ctx, &buffer_name(kind, "stack"), stack_bytes, storage, MemoryLocation::GpuOnly)?
+                        .with_texel_view(ctx, vk::Format::R32_UINT)?,
+                );
                 let entries = sizes.planes.as_deref().unwrap_or_default();
                 let name = buffer_name(kind, "planes");
-                let pl = planes.insert(Buffer::new(
-                    ctx,
-                    &name,
-                    (entries.len() * 16) as u64,
-                    storage,
-                    MemoryLocation::GpuOnly,
-                )?);
+                let pl = planes.insert(
+                    Buffer::new(ctx, &name, (entries.len() * 16) as u64, storage, MemoryLocation::GpuOnly)?
+                        .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
+                );
                 memory::upload(ctx, pl, 0, bytemuck::cast_slice(entries))?;
                 let p = synthesize.insert(ComputePipeline::new(
                     ctx,
                     &shaders::PYRAMID_SYNTHESIZE_COMP,
-                    &[DescriptorKind::StorageBuffer; 4],
+                    &[
+                        DescriptorKind::TexelBuffer,
+                        DescriptorKind::StorageBuffer,
+                        DescriptorKind::StorageBuffer,
+                        DescriptorKind::TexelBuffer,
+                    ],
                     PUSH_SIZE,
                     &[(0, kind.stack_storage.spec())],
                     1,
                 )?);
-                let binds = [Bind::Buffer(lv), Bind::Buffer(tb), Bind::Buffer(st), Bind::Buffer(pl)];
+                let binds = [Bind::Texel(lv), Bind::Buffer(tb), Bind::Buffer(st), Bind::Texel(pl)];
                 sets.1 = p.allocate_set(ctx, &binds)?;
             }
             Ok(())
@@ -320,6 +318,7 @@ impl HeightPyramid {
                 kind,
                 origin: 0.0,
                 stack_scale: 1.0,
+                raw_plane0: false,
                 mode,
                 wrap,
                 work: (work.0 as u32, work.1 as u32),
@@ -409,7 +408,7 @@ impl HeightPyramid {
             barrier::compute_to_compute(ctx, cmd);
             for i in 1..n {
                 let l = layout.levels[i as usize];
-                let push = PyramidPush { level: i, wrap, out_width: n, out_height: 0, scale: 1.0 };
+                let push = PyramidPush { level: i, wrap, out_width: n, out_height: 0, scale: 1.0, flags: 0 };
                 self.decimate.dispatch(
                     ctx,
                     cmd,
@@ -437,7 +436,8 @@ impl HeightPyramid {
             rec.scope(self.kind.stage_synthesize, |ctx, cmd| {
                 let (ww, wh) = self.work;
                 let level = n | (self.layout.count() as u32) << 16;
-                let push = PyramidPush { level, wrap, out_width: ww, out_height: wh, scale: self.stack_scale };
+                let (scale, flags) = (self.stack_scale, self.raw_plane0 as u32);
+                let push = PyramidPush { level, wrap, out_width: ww, out_height: wh, scale, flags };
                 p.dispatch(
                     ctx,
                     cmd,
@@ -548,6 +548,26 @@ impl HeightPyramid {
         Ok(read.transpose()?.map(|v| v.into_iter().map(|x| x * unexpose).collect()))
     }
 
+    /// With `on` (a renderer whose scans read level 0 as the bilinear surface, gi.level0 =
+    /// "bilinear"), the synthesis writes level 0's own values (relative to its bias, as
+    /// `hfgi_fetch` reads them) to plane 0 instead of their B-spline, which such scans never
+    /// read, provided plane 0 has level 0's size (no sub-sampling): the bilinear read of plane 0
+    /// is then bit for bit the raw read of level 0, and the scans read every level through the
+    /// stack, one read path per sample instead of both on every lane (`HFGI_FLAG_RAW_PLANE0`,
+    /// docs/performance.md §17). Returns whether plane 0 now holds them. Before the first
+    /// synthesis.
+    pub(crate) fn set_raw_plane0(&mut self, on: bool) -> bool {
+        let l0 = self.layout.levels[0];
+        let plane0 = self.plane_table.first().map(|p| (p[0], p[1]));
+        self.raw_plane0 = on && self.stack.is_some() && plane0 == Some((l0.width, l0.height));
+        self.raw_plane0
+    }
+
+    /// Whether plane 0 of the stack holds level 0's own values ([`HeightPyramid::set_raw_plane0`]).
+    pub fn raw_plane0(&self) -> bool {
+        self.raw_plane0
+    }
+
     /// Sets the pre-exposure of an f16 stack ([`super::storage::pre_exposure`]): the next
     /// synthesis stores its values times `scale`, and [`HeightPyramid::read_stack_all`] divides
     /// by it.
@@ -606,6 +626,7 @@ impl HeightPyramid {
                 out_width: self.work.0,
                 out_height: self.work.1,
                 scale: 1.0,
+                flags: 0,
             };
             ctx.submit_and_wait(|cmd| {
                 barrier::compute_to_compute(ctx, cmd);

@@ -65,8 +65,12 @@ impl MaxPyramid {
     pub fn new(ctx: &Context, pyramid: &HeightPyramid) -> Result<Self> {
         let l0 = pyramid.layout().levels[0];
         let layout = MaxLayout::new(l0.width as usize, l0.height as usize);
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-        let buffer = Buffer::new(ctx, BUFFER_NAME, buffer_bytes(&layout), usage, MemoryLocation::GpuOnly)?;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        // The indirect scan reads it through a texel view (docs/performance.md §17).
+        let buffer = Buffer::new(ctx, BUFFER_NAME, buffer_bytes(&layout), usage, MemoryLocation::GpuOnly)?
+            .with_texel_view(ctx, vk::Format::R32_UINT)?;
         let binds =
             [Bind::Buffer(pyramid.levels_buffer()), Bind::Buffer(pyramid.table_buffer()), Bind::Buffer(&buffer)];
         let push_size = std::mem::size_of::<PyramidPush>() as u32;
@@ -85,8 +89,13 @@ impl MaxPyramid {
         rec.scope(STAGE_MAX, |ctx, cmd| {
             let (w, h) = self.layout.n0;
             for (level, &(lw, lh, _)) in self.layout.levels.iter().enumerate() {
-                let push =
-                    PyramidPush { level: level as u32, wrap: 0, out_width: w as u32, out_height: h as u32, scale: 1.0 };
+                let push = PyramidPush {
+                    level: level as u32,
+                    out_width: w as u32,
+                    out_height: h as u32,
+                    scale: 1.0,
+                    ..Default::default()
+                };
                 let g =
                     [groups(lw as u32, crate::constants::WORKGROUP), groups(lh as u32, crate::constants::WORKGROUP), 1];
                 self.pipeline.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);

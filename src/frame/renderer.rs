@@ -86,6 +86,8 @@ impl Renderer {
         let kind = PyramidKind::HEIGHTS;
         let mut pyramid =
             HeightPyramid::with_kind(ctx, w, h, work, gi.level_step, gi.pyramid, scene.wrap, kind, stack)?;
+        // Level 0 read as the bilinear surface: through the stack, where its size allows.
+        pyramid.set_raw_plane0(gi.level0 == crate::scene::model::Level0::Bilinear);
         let r = pyramid
             .upload(ctx, &scene.field)
             .and_then(|_| pyramid.set_origin(ctx, height_origin(&scene.field)))

@@ -253,6 +253,18 @@ pub struct ShadePass {
     planes: usize,
 }
 
+/// The shading shader's bindings (glsl/shade/direct.comp.glsl, both modes): texel views of
+/// the heights, `V` or `U`, the light and the triple table, which it reads per texel or per
+/// triple (docs/performance.md §17); storage buffers for the rest.
+pub(crate) const BINDINGS: [DescriptorKind; 11] = {
+    let mut k = [DescriptorKind::StorageBuffer; 11];
+    k[0] = DescriptorKind::TexelBuffer;
+    k[1] = DescriptorKind::TexelBuffer;
+    k[2] = DescriptorKind::TexelBuffer;
+    k[3] = DescriptorKind::TexelBuffer;
+    k
+};
+
 impl ShadePass {
     /// `blockers`: the sphere blockers' pass (its visibility buffer and its spheres, for the
     /// key lights' shadows), when the scene has spheres.
@@ -266,14 +278,21 @@ impl ShadePass {
         let (w, h) = (scene.field.width(), scene.field.height());
         let data = ShadeData::new(scene);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let mut bufs: Vec<Buffer> = Vec::new();
         let mut pipeline = None;
+        // Texel views of the light (vec4s) and the triple table (uvec2s), docs/performance.md §17.
+        let views = [Some(vk::Format::R32G32B32A32_UINT), Some(vk::Format::R32G32_UINT), None, None];
         let made = (|| -> Result<vk::DescriptorSet> {
-            for ((name, size), bytes) in upload_sizes(scene).into_iter().zip(data.uploads()) {
+            for (((name, size), bytes), view) in upload_sizes(scene).into_iter().zip(data.uploads()).zip(views) {
                 debug_assert_eq!(size, upload_bytes(bytes.len()), "{name}");
                 let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
+                let b = match view {
+                    Some(format) => b.with_texel_view(ctx, format)?,
+                    None => b,
+                };
                 if !bytes.is_empty() {
                     memory::upload(ctx, &b, 0, bytes)?;
                 }
@@ -289,7 +308,7 @@ impl ShadePass {
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
-                &[DescriptorKind::StorageBuffer; 11],
+                &BINDINGS,
                 std::mem::size_of::<ShadePush>() as u32,
                 &spec(scene, None),
                 1,
@@ -297,10 +316,10 @@ impl ShadePass {
             p.allocate_set(
                 ctx,
                 &[
-                    Bind::Buffer(pyramid.levels_buffer()),
-                    Bind::Buffer(vis.buffer()),
-                    Bind::Buffer(&bufs[0]),
-                    Bind::Buffer(&bufs[1]),
+                    Bind::Texel(pyramid.levels_buffer()),
+                    Bind::Texel(vis.buffer()),
+                    Bind::Texel(&bufs[0]),
+                    Bind::Texel(&bufs[1]),
                     Bind::Buffer(&bufs[2]),
                     Bind::Buffer(&bufs[3]),
                     Bind::Buffer(&bufs[4]),

@@ -18,6 +18,8 @@ pub struct PyramidPush {
     /// Synthesize into an f16 stack: the pre-exposure its values are stored at
     /// ([`crate::frame::storage::pre_exposure`]); 1 otherwise.
     pub scale: f32,
+    /// Synthesize: 1 when plane 0 holds level 0's own values (`HeightPyramid::set_raw_plane0`).
+    pub flags: u32,
 }
 
 /// `HFGI_FLAG_RAW_LEVEL0` (glsl/inc/hfgi_pyramid.glsl): level 0 read as the bilinear surface.
@@ -34,6 +36,18 @@ pub const FLAG_ACCUMULATE: u32 = 8;
 pub const FLAG_MAX_BOUND: u32 = 16;
 /// `HFGI_FLAG_SWEEP`: the visibility pass reads `ω_max` from the line sweep's horizons.
 pub const FLAG_SWEEP: u32 = 32;
+/// `HFGI_FLAG_RAW_PLANE0`: the height stack's plane 0 holds level 0's own values
+/// ([`crate::frame::pyramid::HeightPyramid::set_raw_plane0`]), so a scan reads level 0 through
+/// the stack like every other level: one read path per sample (docs/performance.md §17).
+pub const FLAG_RAW_PLANE0: u32 = 64;
+/// `HFGI_FLAG_RAW_RPLANE0`: the same of the radiance stack (the indirect scan).
+pub const FLAG_RAW_RPLANE0: u32 = 128;
+
+/// The static flags of scans reading `heights` (and `radiance`) whose stacks' plane 0 holds
+/// level 0's own values.
+pub fn raw_plane_flags(heights: bool, radiance: bool) -> u32 {
+    (if heights { FLAG_RAW_PLANE0 } else { 0 }) | if radiance { FLAG_RAW_RPLANE0 } else { 0 }
+}
 
 /// The flags that change between the dispatches of one pipeline (`HFGI_DYNAMIC_FLAGS`); every
 /// other bit is fixed when the pipeline is created and reaches the shader as a specialization
@@ -390,7 +404,7 @@ const _: () = assert!(std::mem::size_of::<WaterPush>() == 96);
 const _: () = assert!(std::mem::size_of::<ShadePush>() == 128);
 const _: () = assert!(std::mem::size_of::<LocalPush>() == 96);
 const _: () = assert!(std::mem::size_of::<BlockerPush>() == 112);
-const _: () = assert!(std::mem::size_of::<PyramidPush>() == 20);
+const _: () = assert!(std::mem::size_of::<PyramidPush>() == 24);
 const _: () = assert!(std::mem::size_of::<ViewPush>() == 112);
 
 #[cfg(test)]
@@ -448,7 +462,7 @@ mod layout_against_glsl {
 
     #[test]
     fn every_shared_struct_matches_the_glsl_header_field_by_field() {
-        layout!(PyramidPush { level, wrap, out_width, out_height, scale });
+        layout!(PyramidPush { level, wrap, out_width, out_height, scale, flags });
         layout!(VisibilityPush {
             sample_offset,
             sample_count,

@@ -92,7 +92,10 @@ impl SweepPass {
         let plan = SweepPlan::new((l0.width as usize, l0.height as usize), (ww as usize, wh as usize), max_set);
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let [(hn, hs), (un, us)] = plan.buffer_sizes();
-        let horizons = Buffer::new(ctx, hn, hs, usage, MemoryLocation::GpuOnly)?;
+        // The visibility shader reads the horizons through a texel view (docs/performance.md §17).
+        let horizons =
+            Buffer::new(ctx, hn, hs, usage | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER, MemoryLocation::GpuOnly)?
+                .with_texel_view(ctx, vk::Format::R32_UINT)?;
         let hull = match Buffer::new(ctx, un, us, usage, MemoryLocation::GpuOnly) {
             Ok(b) => b,
             Err(e) => {

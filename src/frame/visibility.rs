@@ -109,6 +109,16 @@ pub struct VisibilityPass {
     sweep: Option<SweepPass>,
 }
 
+/// The visibility shader's bindings (glsl/visibility/visibility.comp.glsl): texel views of what
+/// it reads per sample or azimuth (docs/performance.md §17); the level table, read per
+/// receiver, and `V`, written, are storage buffers.
+const BINDINGS: [DescriptorKind; 8] = {
+    let mut k = [DescriptorKind::TexelBuffer; 8];
+    k[1] = DescriptorKind::StorageBuffer;
+    k[5] = DescriptorKind::StorageBuffer;
+    k
+};
+
 impl VisibilityPass {
     /// Builds the pass for `scene` reading `pyramid`. The azimuth samples and the folded wedge
     /// matrices `A_j` are computed here in f64 and uploaded.
@@ -120,6 +130,7 @@ impl VisibilityPass {
         let env = sets.iter().filter(|s| s.kind == SetKind::Environment).map(|s| s.count as u64).sum::<u64>();
         let key_offsets = (env, env * (fold.len() as u64) / (samples.len().max(1) as u64));
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let storage = scene.gi.storage;
@@ -137,14 +148,23 @@ impl VisibilityPass {
             level_bias: scene.gi.level_step * scene.gi.level_offset,
             texel_size: scene.texel_size as f32,
             stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
-            flags: super::shared::scan_flags(&scene.gi) | if sweeps { FLAG_SWEEP } else { 0 },
+            flags: super::shared::scan_flags(&scene.gi)
+                | if sweeps { FLAG_SWEEP } else { 0 }
+                | super::shared::raw_plane_flags(pyramid.raw_plane0(), false),
             sweep_near: scene.gi.sweep_near as f32,
             scan_extent: super::shared::scan_extent(&scene.gi),
             ..Default::default()
         };
         let made = (|| -> Result<vk::DescriptorSet> {
-            for (name, size) in sizes {
-                parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?);
+            // Texel views (docs/performance.md §17): the samples as uvec4s, the fold as words,
+            // V as words (written here as a storage buffer, read by shade.direct through the view).
+            let views = [Some(vk::Format::R32G32B32A32_UINT), Some(vk::Format::R32_UINT), Some(vk::Format::R32_UINT)];
+            for ((name, size), view) in sizes.into_iter().zip(views) {
+                let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
+                parts.push(match view {
+                    Some(format) => b.with_texel_view(ctx, format)?,
+                    None => b,
+                });
             }
             if !samples.is_empty() {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
@@ -156,7 +176,7 @@ impl VisibilityPass {
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::VISIBILITY_VISIBILITY_COMP,
-                &[DescriptorKind::StorageBuffer; 8],
+                &BINDINGS,
                 std::mem::size_of::<VisibilityPush>() as u32,
                 &[
                     &[
@@ -174,14 +194,15 @@ impl VisibilityPass {
             p.allocate_set(
                 ctx,
                 &[
-                    Bind::Buffer(pyramid.levels_buffer()),
+                    Bind::Texel(pyramid.levels_buffer()),
                     Bind::Buffer(pyramid.table_buffer()),
-                    Bind::Buffer(stack),
-                    Bind::Buffer(&parts[0]),
-                    Bind::Buffer(&parts[1]),
+                    Bind::Texel(stack),
+                    Bind::Texel(&parts[0]),
+                    Bind::Texel(&parts[1]),
                     Bind::Buffer(&parts[2]),
-                    Bind::Buffer(sweep.as_ref().map_or(&parts[0], |s: &SweepPass| s.horizons())),
-                    Bind::Buffer(pyramid.height_planes()),
+                    // Without the sweep, never read: any view of words.
+                    Bind::Texel(sweep.as_ref().map_or(&parts[1], |s: &SweepPass| s.horizons())),
+                    Bind::Texel(pyramid.height_planes()),
                 ],
             )
         })();

@@ -19,29 +19,32 @@ fn memory_barrier(
     unsafe { ctx.device().cmd_pipeline_barrier2(cmd, &dep) };
 }
 
-/// Compute shader writes → compute shader reads/writes (between passes or pyramid levels).
+/// What a compute shader of hfgi's reads and writes: storage buffers, and the uniform texel
+/// buffers the scanning passes read per sample (docs/performance.md §17).
+const COMPUTE_ACCESS: vk::AccessFlags2 = vk::AccessFlags2::from_raw(
+    vk::AccessFlags2::SHADER_STORAGE_READ.as_raw()
+        | vk::AccessFlags2::SHADER_SAMPLED_READ.as_raw()
+        | vk::AccessFlags2::SHADER_STORAGE_WRITE.as_raw(),
+);
+
+/// Compute shader writes → compute shader reads (storage and texel) and writes (between passes
+/// or pyramid levels).
 pub fn compute_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(
         ctx,
         cmd,
         (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_WRITE),
-        (
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-        ),
+        (vk::PipelineStageFlags2::COMPUTE_SHADER, COMPUTE_ACCESS),
     );
 }
 
-/// Transfer writes (uploads) → compute shader reads/writes.
+/// Transfer writes (uploads) → compute shader reads (storage and texel) and writes.
 pub fn transfer_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(
         ctx,
         cmd,
         (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_WRITE),
-        (
-            vk::PipelineStageFlags2::COMPUTE_SHADER,
-            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-        ),
+        (vk::PipelineStageFlags2::COMPUTE_SHADER, COMPUTE_ACCESS),
     );
 }
 
@@ -60,13 +63,17 @@ pub fn compute_to_update(ctx: &Context, cmd: vk::CommandBuffer) {
     );
 }
 
-/// Transfer writes of any transfer command (copy, fill, update) → compute shader reads.
+/// Transfer writes of any transfer command (copy, fill, update) → compute shader reads
+/// (storage and texel).
 pub fn update_to_compute(ctx: &Context, cmd: vk::CommandBuffer) {
     memory_barrier(
         ctx,
         cmd,
         (vk::PipelineStageFlags2::ALL_TRANSFER, vk::AccessFlags2::TRANSFER_WRITE),
-        (vk::PipelineStageFlags2::COMPUTE_SHADER, vk::AccessFlags2::SHADER_STORAGE_READ),
+        (
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_SAMPLED_READ,
+        ),
     );
 }
 

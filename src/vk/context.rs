@@ -81,6 +81,11 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u32,
     /// `maxMemoryAllocationSize` (Vulkan 1.1): the largest single allocation.
     pub max_memory_allocation_size: u64,
+    /// `maxTexelBufferElements`: the most texels a texel view may cover
+    /// ([`crate::vk::Buffer::with_texel_view`]).
+    pub max_texel_buffer_elements: u32,
+    /// `maxUniformBufferRange`: the largest uniform buffer a shader may bind.
+    pub max_uniform_buffer_range: u32,
 }
 
 struct Messenger {
@@ -433,6 +438,8 @@ impl Context {
             device_local_heap_bytes,
             max_storage_buffer_range: props.limits.max_storage_buffer_range,
             max_memory_allocation_size: m3.max_memory_allocation_size,
+            max_texel_buffer_elements: props.limits.max_texel_buffer_elements,
+            max_uniform_buffer_range: props.limits.max_uniform_buffer_range,
         }
     }
 

@@ -13,6 +13,8 @@ pub struct Buffer {
     pub raw: vk::Buffer,
     pub size: u64,
     pub name: String,
+    /// The buffer's texel view ([`Buffer::with_texel_view`]; null without one).
+    pub texel: vk::BufferView,
     alloc: Option<Allocation>,
 }
 
@@ -70,7 +72,38 @@ impl Buffer {
             return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
         }
         ctx.set_name(raw, name);
-        Ok(Self { raw, size, name: name.to_string(), alloc: Some(allocation) })
+        Ok(Self { raw, size, name: name.to_string(), texel: vk::BufferView::null(), alloc: Some(allocation) })
+    }
+
+    /// The buffer with a texel view of `format` over all of it, for shaders that read it as a
+    /// uniform texel buffer (`samplerBuffer`, `texelFetch`): lavapipe gathers those on its SIMD
+    /// lanes, where it reads a storage buffer lane by lane (docs/performance.md §17). The buffer
+    /// must have been created with `UNIFORM_TEXEL_BUFFER` usage; the view is destroyed with it.
+    /// On failure the buffer is destroyed.
+    pub fn with_texel_view(mut self, ctx: &Context, format: vk::Format) -> Result<Self> {
+        let texel = if format == vk::Format::R32G32B32A32_UINT { 16 } else { 4 };
+        let max = ctx.info().max_texel_buffer_elements;
+        if self.size / texel > u64::from(max) {
+            let e = Error::param(
+                format!("texel view of GPU buffer {}", self.name),
+                format!("{} texels", self.size / texel),
+                format!("at most {max} (maxTexelBufferElements of {}); a smaller field", ctx.info().name),
+            );
+            self.destroy(ctx);
+            return Err(e);
+        }
+        let info = vk::BufferViewCreateInfo::default().buffer(self.raw).format(format).offset(0).range(vk::WHOLE_SIZE);
+        match unsafe { ctx.device().create_buffer_view(&info, None) } {
+            Ok(v) => {
+                ctx.set_name(v, &self.name);
+                self.texel = v;
+                Ok(self)
+            }
+            Err(e) => {
+                self.destroy(ctx);
+                Err(Error::Vulkan { call: "vkCreateBufferView", result: e })
+            }
+        }
     }
 
     /// The host-visible bytes of a `CpuToGpu`/`GpuToCpu` buffer.
@@ -86,6 +119,9 @@ impl Buffer {
 
     /// Frees the buffer and its memory.
     pub fn destroy(mut self, ctx: &Context) {
+        if self.texel != vk::BufferView::null() {
+            unsafe { ctx.device().destroy_buffer_view(self.texel, None) };
+        }
         unsafe { ctx.device().destroy_buffer(self.raw, None) };
         if let (Some(a), Ok(mut al)) = (self.alloc.take(), ctx.allocator().lock()) {
             let _ = al.free(a);

@@ -12,6 +12,8 @@ use crate::shaders::Spirv;
 pub enum DescriptorKind {
     StorageBuffer,
     StorageImage,
+    /// A uniform texel buffer (`samplerBuffer`/`usamplerBuffer`), bound with [`Bind::Texel`].
+    TexelBuffer,
 }
 
 impl DescriptorKind {
@@ -19,6 +21,7 @@ impl DescriptorKind {
         match self {
             DescriptorKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
             DescriptorKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+            DescriptorKind::TexelBuffer => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         }
     }
 }
@@ -28,6 +31,8 @@ pub enum Bind<'a> {
     Buffer(&'a Buffer),
     /// A storage image in `GENERAL` layout.
     Image(&'a Image),
+    /// A buffer's texel view ([`Buffer::with_texel_view`]).
+    Texel(&'a Buffer),
 }
 
 /// A compute pipeline and everything it owns.
@@ -203,7 +208,7 @@ pub(crate) fn create_layouts(
 /// A descriptor pool for `max_sets` sets of `kinds` (null when `kinds` is empty).
 pub(crate) fn create_pool(ctx: &Context, kinds: &[DescriptorKind], max_sets: u32) -> Result<vk::DescriptorPool> {
     let mut sizes = Vec::new();
-    for k in [DescriptorKind::StorageBuffer, DescriptorKind::StorageImage] {
+    for k in [DescriptorKind::StorageBuffer, DescriptorKind::StorageImage, DescriptorKind::TexelBuffer] {
         let n = kinds.iter().filter(|x| **x == k).count() as u32;
         if n > 0 {
             sizes.push(vk::DescriptorPoolSize { ty: k.raw(), descriptor_count: n * max_sets.max(1) });
@@ -276,7 +281,7 @@ pub(crate) fn allocate_set(
         .iter()
         .map(|b| match b {
             Bind::Buffer(buf) => [buf.whole()],
-            Bind::Image(_) => [vk::DescriptorBufferInfo::default()],
+            Bind::Image(_) | Bind::Texel(_) => [vk::DescriptorBufferInfo::default()],
         })
         .collect();
     let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = binds
@@ -285,7 +290,14 @@ pub(crate) fn allocate_set(
             Bind::Image(img) => {
                 [vk::DescriptorImageInfo::default().image_view(img.view).image_layout(vk::ImageLayout::GENERAL)]
             }
-            Bind::Buffer(_) => [vk::DescriptorImageInfo::default()],
+            Bind::Buffer(_) | Bind::Texel(_) => [vk::DescriptorImageInfo::default()],
+        })
+        .collect();
+    let texel_views: Vec<[vk::BufferView; 1]> = binds
+        .iter()
+        .map(|b| match b {
+            Bind::Texel(buf) => [buf.texel],
+            _ => [vk::BufferView::null()],
         })
         .collect();
     let writes: Vec<_> = binds
@@ -297,6 +309,7 @@ pub(crate) fn allocate_set(
             match b {
                 Bind::Buffer(_) => w.buffer_info(&buffer_infos[i]),
                 Bind::Image(_) => w.image_info(&image_infos[i]),
+                Bind::Texel(_) => w.texel_buffer_view(&texel_views[i]),
             }
         })
         .collect();

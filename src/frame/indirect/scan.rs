@@ -1,0 +1,171 @@
+//! The indirect scan's pipelines (stage `indirect.scan`, glsl/indirect/scan.comp.glsl): their
+//! kinds (what each compiles in), specialization constants, bindings, push constants and azimuth
+//! chunks. The pass itself is [`super::IndirectPass`].
+
+use ash::vk;
+
+use super::super::radiance::RadiancePyramid;
+use super::super::renderer::vector_pyramid;
+use super::super::shared::{azimuth_chunks, IndirectPush, INDIRECT_LOOP_BUDGET};
+use crate::error::Result;
+use crate::math::elevation;
+use crate::rules::scene::u_coefficients;
+use crate::scene::model::{PyramidMode, Scene};
+use crate::shaders;
+use crate::vk::pipeline::Bind;
+use crate::vk::{ComputePipeline, Context, DescriptorKind};
+
+/// The scan's push constants at creation (per dispatch, `record_scan` sets the azimuth chunk,
+/// the probes and the dynamic flags); their modes are also its specialization constants.
+pub(super) fn scan_push(
+    scene: &Scene,
+    (ww, wh): (u32, u32),
+    sample_count: u32,
+    rad: &RadiancePyramid,
+    raw_planes: u32,
+) -> IndirectPush {
+    let gi = &scene.gi;
+    let k = scene.material.specular.unwrap_or([0.0; 3]);
+    IndirectPush {
+        work_width: ww,
+        work_height: wh,
+        wrap: scene.wrap as u32,
+        level_step: gi.level_step,
+        level_bias: gi.level_step * gi.level_offset,
+        texel_size: scene.texel_size as f32,
+        stack_mode: (gi.pyramid == PyramidMode::Stack) as u32,
+        sample_count,
+        radiance_levels: rad.pyramid.layout().count() as u32,
+        radiance_stack: (rad.pyramid.mode() == PyramidMode::Stack) as u32,
+        flags: super::super::shared::scan_flags(gi) | raw_planes,
+        scan_extent: super::super::shared::scan_extent(gi),
+        specular: [k[0], k[1], k[2], 0.0],
+        sample_offset: 0,
+        probes: gi.probes(1),
+        radiance_planes: rad.pyramid.stack_levels() as u32,
+        radiance_scale: 1.0, // IndirectPass::set_pre_exposure
+    }
+}
+
+/// Whether a bounce's scan reads the max-pyramid bound: the pass has the max pyramid and the
+/// bounce probes. The bound pays where it saves probes; without probes it costs more than it
+/// saves (docs/accuracy.md §4), and its pipeline is then compiled without it (§12 of
+/// docs/performance.md).
+pub(super) fn bounded(has_max: bool, probes: u32) -> bool {
+    has_max && probes > 0
+}
+
+/// What a scan pipeline compiles in (specialization constants 9 and 11 of
+/// `glsl/indirect/scan.comp.glsl`): the max-pyramid bound, and the radial probes. lavapipe runs
+/// code on every lane whether a uniform flag skips it or not (docs/performance.md §12, §17).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct ScanKind {
+    pub bound: bool,
+    pub probes: bool,
+}
+
+impl ScanKind {
+    /// The kind that scans a bounce with `probes` radial probes exactly and fastest.
+    pub fn of(has_max: bool, probes: u32) -> Self {
+        Self { bound: bounded(has_max, probes), probes: probes > 0 }
+    }
+
+    /// Whether a pipeline of this kind scans a bounce of kind `k` exactly: the bound is a
+    /// dynamic flag (a bounded pipeline without it scans unbounded) and probes are a dynamic
+    /// count (probe code with 0 probes scans none); compiled-out code cannot run.
+    pub fn serves(self, k: ScanKind) -> bool {
+        (self.bound || !k.bound) && (self.probes || !k.probes)
+    }
+}
+
+/// The scan pipelines a scene gets: the first bounce's kind and, when later bounces differ,
+/// theirs: when the scene has later bounces, or when the first's pipeline could not scan one
+/// (a bounce past `gi.bounces` takes the first otherwise, which scans it exactly).
+pub(super) fn scan_kinds(scene: &Scene, has_max: bool) -> Vec<ScanKind> {
+    let gi = &scene.gi;
+    let first = ScanKind::of(has_max, gi.probes(1));
+    let later = ScanKind::of(has_max, gi.probes(2));
+    if later != first && (gi.bounces > 1 || !first.serves(later)) {
+        vec![first, later]
+    } else {
+        vec![first]
+    }
+}
+
+/// The scan's specialization constants (`glsl/indirect/scan.comp.glsl`) for `n_v` height levels
+/// and the creation push `push`: the bound's and the probes' code compiled in or out by `kind`.
+pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: ScanKind) -> Vec<(u32, u32)> {
+    let gi = &scene.gi;
+    let n = gi.sh_order;
+    let own = [
+        (0, n as u32),
+        (1, n_v as u32),
+        (2, vector_pyramid(scene) as u32),
+        (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
+        (7, push.radiance_stack),
+        (8, gi.storage.spec()),
+        (9, kind.bound as u32),
+        (10, u_coefficients(scene) as u32),
+        (11, kind.probes as u32),
+    ];
+    [&own[..], &super::super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
+}
+
+/// Azimuth chunks `(first, count)` of the first bounce's scan and of the later ones' over their
+/// sample sets ([`super::ScanData`]'s sets), against lavapipe's loop limit.
+pub(super) fn scan_chunks(
+    gi: &crate::scene::model::GiSettings,
+    ladder: usize,
+    sets: [(u32, u32); 2],
+) -> [Vec<(u32, u32)>; 2] {
+    let (n, e) = (gi.sh_order, elevation::gpu_size(gi.elevation_basis, gi.sh_order));
+    [(gi.probes(1), sets[0]), (gi.probes(2), sets[1])].map(|(p, (first, count))| {
+        // A member adds an outer iteration of the scan's while-while loop and an e-vector.
+        let cost = ladder * (1 + p as usize) * (e + 1) + n * n * e;
+        let chunks = azimuth_chunks(count, cost as u32, INDIRECT_LOOP_BUDGET);
+        chunks.into_iter().map(|(f, c)| (first + f, c)).collect()
+    })
+}
+
+/// The scan's pipelines of `kinds` (pushed to `pipes`, which owns them on every exit) and their
+/// descriptor sets over `binds`.
+pub(super) fn scan_pipelines(
+    ctx: &Context,
+    scene: &Scene,
+    n_v: usize,
+    push: &IndirectPush,
+    kinds: &[ScanKind],
+    binds: &[Bind],
+    pipes: &mut Vec<ComputePipeline>,
+) -> Result<Vec<vk::DescriptorSet>> {
+    let mut sets = Vec::new();
+    for &kind in kinds {
+        let spec = scan_spec(scene, n_v, push, kind);
+        let size = std::mem::size_of::<IndirectPush>() as u32;
+        let scan = ComputePipeline::new(ctx, &shaders::INDIRECT_SCAN_COMP, &SCAN_BINDINGS, size, &spec, 1)?;
+        sets.push(pipes.push_get(scan).allocate_set(ctx, binds)?);
+    }
+    Ok(sets)
+}
+
+/// The scan's bindings (glsl/indirect/scan.comp.glsl): storage buffers but for the texel
+/// buffers it reads per sample (docs/performance.md §17).
+pub(super) const SCAN_BINDINGS: [DescriptorKind; 14] = {
+    let mut k = [DescriptorKind::TexelBuffer; 14];
+    k[1] = DescriptorKind::StorageBuffer; // the level tables and the shading constants: read per receiver
+    k[4] = DescriptorKind::StorageBuffer;
+    k[9] = DescriptorKind::StorageBuffer; // U: written
+    k[10] = DescriptorKind::StorageBuffer;
+    k
+};
+
+pub(super) trait PushGet<T> {
+    fn push_get(&mut self, v: T) -> &mut T;
+}
+
+impl<T> PushGet<T> for Vec<T> {
+    fn push_get(&mut self, v: T) -> &mut T {
+        self.push(v);
+        self.last_mut().expect("just pushed")
+    }
+}
