@@ -4,7 +4,7 @@
 mod common;
 
 use common::scenes::{rel_l2, scene, sky, uniform};
-use common::{debug_buffers, find_buffer, gpu, rough_field};
+use common::{debug_buffers, find_buffer, gpu, render_with, rough_field};
 use hfgi::frame::{Renderer, ShadingLayers};
 use hfgi::reference::indirect::render_gi;
 use hfgi::scene::model::{Albedo, GlossyPyramid, Interpolation, PyramidMode, Scene};
@@ -462,4 +462,35 @@ fn diffuse_u_keeps_the_bands_the_clamped_cosine_reads() {
         }
     }
     assert!(common::finish(ctx).is_empty());
+}
+
+/// Plane 0 of a renderer's height stack holds level 0 itself, relative to the origin, when the
+/// scans read level 0 as the bilinear surface at full resolution (docs/pyramid.md; the scans
+/// then read every level through the stack, docs/performance.md §17): bit for bit `h − z0` as
+/// `hfgi_fetch` computes it. With `gi.level0 = "bspline"` the plane is the B-spline, which on a
+/// rough field differs from the samples; sub-sampled, the plane has the working grid's size.
+/// (The scans' use of it is covered by the GPU-vs-twin tests above: the twin reads level 0.)
+#[test]
+fn height_plane_0_holds_level_0_when_the_scans_read_it_raw() {
+    use hfgi::scene::model::Level0;
+    let ctx = gpu();
+    let (w, h) = (23, 17);
+    let mut s = bright(rough_field(w, h, 4));
+    s.gi.bounces = 1;
+    let origin = render_with(&ctx, &s, |_, r| r.height_origin());
+    let b = debug_buffers(&ctx, &s);
+    let (level0, plane0) = (find_buffer(&b, "pyramid.level0"), find_buffer(&b, "pyramid.stack0"));
+    assert_eq!(plane0.len(), w * h, "plane 0 has level 0's size");
+    for (i, (&l, &p)) in level0.iter().zip(plane0).enumerate() {
+        assert_eq!(p.to_bits(), (l - origin).to_bits(), "texel {i}: plane 0 {p} vs level 0 − z0 {}", l - origin);
+    }
+    s.gi.level0 = Level0::Bspline;
+    let b = debug_buffers(&ctx, &s);
+    let (level0, plane0) = (find_buffer(&b, "pyramid.level0"), find_buffer(&b, "pyramid.stack0"));
+    let off = level0.iter().zip(plane0).map(|(l, p)| (l - origin - p).abs()).fold(0.0f32, f32::max);
+    assert!(off > 1e-3, "B-spline plane 0 equals the samples ({off:e}): the test field is too smooth");
+    s.gi.level0 = Level0::Bilinear;
+    s.gi.subsample = 2;
+    let b = debug_buffers(&ctx, &s);
+    assert_eq!(find_buffer(&b, "pyramid.stack0").len(), w.div_ceil(2) * h.div_ceil(2), "sub-sampled plane 0");
 }

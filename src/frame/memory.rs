@@ -305,3 +305,38 @@ pub fn check_fits(estimate: &MemoryEstimate, info: &crate::vk::DeviceInfo) -> Re
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A device that can hold the scene but whose texel views cover fewer texels than the
+    /// radiance levels hold: `check_fits` refuses it before any GPU work, naming the buffer and
+    /// `maxTexelBufferElements`; with the limit one texel larger than the largest viewed buffer,
+    /// it accepts.
+    #[test]
+    fn texel_views_beyond_the_device_limit_are_refused() {
+        let scene = crate::scene::file::default_scene().expect("default scene");
+        let e = renderer(&scene).expect("estimate");
+        let viewed = |n: &str| TEXEL_VIEWED.iter().any(|t| n.ends_with(t));
+        let largest = e.buffers.iter().filter(|(n, _)| viewed(n)).map(|(_, b)| *b / 4).max().expect("viewed");
+        let mut info = crate::vk::DeviceInfo {
+            name: "test device".into(),
+            kind: ash::vk::PhysicalDeviceType::CPU,
+            driver: String::new(),
+            api_version: (1, 3, 0),
+            max_image_dimension_2d: 16384,
+            timestamp_period: 1.0,
+            timestamp_valid_bits: 64,
+            device_local_heap_bytes: 1 << 40,
+            max_storage_buffer_range: u32::MAX,
+            max_memory_allocation_size: 1 << 40,
+            max_texel_buffer_elements: (largest - 1) as u32,
+            max_uniform_buffer_range: 65536,
+        };
+        let err = check_fits(&e, &info).expect_err("texel limit").to_string();
+        assert!(err.contains("maxTexelBufferElements") && err.contains("hfgi."), "{err}");
+        info.max_texel_buffer_elements = largest as u32;
+        check_fits(&e, &info).expect("within the limit");
+    }
+}

@@ -4,10 +4,10 @@
 
 use ash::vk;
 
-use super::super::radiance::RadiancePyramid;
-use super::super::renderer::vector_pyramid;
-use super::super::shared::{azimuth_chunks, IndirectPush, INDIRECT_LOOP_BUDGET};
 use crate::error::Result;
+use crate::frame::radiance::RadiancePyramid;
+use crate::frame::renderer::vector_pyramid;
+use crate::frame::shared::{azimuth_chunks, IndirectPush, INDIRECT_LOOP_BUDGET};
 use crate::math::elevation;
 use crate::rules::scene::u_coefficients;
 use crate::scene::model::{PyramidMode, Scene};
@@ -37,8 +37,8 @@ pub(super) fn scan_push(
         sample_count,
         radiance_levels: rad.pyramid.layout().count() as u32,
         radiance_stack: (rad.pyramid.mode() == PyramidMode::Stack) as u32,
-        flags: super::super::shared::scan_flags(gi) | raw_planes,
-        scan_extent: super::super::shared::scan_extent(gi),
+        flags: crate::frame::shared::scan_flags(gi) | raw_planes,
+        scan_extent: crate::frame::shared::scan_extent(gi),
         specular: [k[0], k[1], k[2], 0.0],
         sample_offset: 0,
         probes: gi.probes(1),
@@ -108,7 +108,7 @@ pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: Sc
         (10, u_coefficients(scene) as u32),
         (11, kind.probes as u32),
     ];
-    [&own[..], &super::super::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
+    [&own[..], &crate::frame::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }
 
 /// Azimuth chunks `(first, count)` of the first bounce's scan and of the later ones' over their
@@ -167,5 +167,35 @@ impl<T> PushGet<T> for Vec<T> {
     fn push_get(&mut self, v: T) -> &mut T {
         self.push(v);
         self.last_mut().expect("just pushed")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pipelines a scene gets (docs/performance.md §12, §17): `default` with 2 bounces a
+    /// bounded, probing first one and a bare second; one bounce, only the first; probes in the
+    /// later bounces only, both even with one bounce (a bounce past `gi.bounces` needs the
+    /// probes' code, which the first lacks). Every kind serves itself, and only a kind with at
+    /// least its code serves another.
+    #[test]
+    fn scan_kinds_cover_every_bounce_with_code_it_runs() {
+        let mut s = crate::scene::file::default_scene().expect("default scene");
+        s.gi.bounces = 2;
+        let full = ScanKind { bound: true, probes: true };
+        let bare = ScanKind { bound: false, probes: false };
+        assert_eq!(scan_kinds(&s, true), vec![full, bare]);
+        assert_eq!(scan_kinds(&s, false), vec![ScanKind { bound: false, probes: true }, bare]);
+        s.gi.bounces = 1;
+        assert_eq!(scan_kinds(&s, true), vec![full]);
+        (s.gi.radial_probes, s.gi.radial_probes_later) = (0, 1);
+        assert_eq!(scan_kinds(&s, true), vec![bare, full]);
+        let (probing, bounding) = (ScanKind { bound: false, probes: true }, ScanKind { bound: true, probes: false });
+        for a in [full, bare, probing, bounding] {
+            assert!(a.serves(a) && full.serves(a), "{a:?}");
+            assert_eq!(bare.serves(a), a == bare, "{a:?}");
+        }
+        assert!(!probing.serves(bounding) && !bounding.serves(probing));
     }
 }
