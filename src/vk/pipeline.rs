@@ -296,7 +296,10 @@ pub(crate) fn allocate_set(
     let texel_views: Vec<[vk::BufferView; 1]> = binds
         .iter()
         .map(|b| match b {
-            Bind::Texel(buf) => [buf.texel],
+            Bind::Texel(buf) => {
+                debug_assert!(buf.texel != vk::BufferView::null(), "{name}: buffer {} has no texel view", buf.name);
+                [buf.texel]
+            }
             _ => [vk::BufferView::null()],
         })
         .collect();
