@@ -18,6 +18,11 @@ uint hfgi_stride(int values) {
 
 // Value i of the word array `buf`.
 #define HFGI_LOAD(buf, i) (HFGI_HALF != 0u ? unpackHalf2x16(buf[(i) >> 1u])[(i) & 1u] : uintBitsToFloat(buf[(i)]))
+// Value i of the same words read through a texel view `t` of them (`usamplerBuffer`, R32_UINT;
+// docs/performance.md §17).
+#define HFGI_LOAD_TEXEL(t, i)                                                                    \
+    (HFGI_HALF != 0u ? unpackHalf2x16(texelFetch(t, int((i) >> 1u)).x)[(i) & 1u]                   \
+                     : uintBitsToFloat(texelFetch(t, int(i)).x))
 
 // The word holding the pair v (f16), plus the pair already in `old` when `acc`.
 uint hfgi_pack_pair(vec2 v, uint old, bool acc) {

@@ -57,17 +57,12 @@ layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 // hfgi_filter.glsl; docs/performance.md §17); only what it reads per receiver or writes is a
 // storage buffer.
 #define HFGI_TEXELS
-#define HFGI_TEXEL_F(t, i) uintBitsToFloat(texelFetch(t, int(i)).x)
 #define HFGI_LEVEL_READ(l, i) ((l).source == 0u ? HFGI_TEXEL_F(hfgi_levels_texels, i) : HFGI_TEXEL_F(hfgi_radiance_levels_texels, i))
 #define hfgi_radiance_levels(i) HFGI_TEXEL_F(hfgi_radiance_levels_texels, i)
 #define hfgi_rplanes(i) texelFetch(hfgi_rplanes_texels, int(i))
 #define hfgi_max(i) HFGI_TEXEL_F(hfgi_max_texels, i)
 #include "hfgi_store.glsl"
-// Value i of the radiance stack's words (HFGI_LOAD's layout, through the texel view).
-float rstack_at(uint i) {
-    if (HFGI_HALF != 0u) return unpackHalf2x16(texelFetch(hfgi_radiance_stack_texels, int(i >> 1u)).x)[i & 1u];
-    return uintBitsToFloat(texelFetch(hfgi_radiance_stack_texels, int(i)).x);
-}
+#define rstack_at(i) HFGI_LOAD_TEXEL(hfgi_radiance_stack_texels, i)
 // With f16 the radiance stack holds radiance × pc.radiance_scale (the pre-exposure,
 // frame::storage::pre_exposure): its reads divide by it, and U is stored times it.
 float hfgi_unexpose;

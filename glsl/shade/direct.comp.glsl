@@ -58,11 +58,7 @@ layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_address.glsl"
 #include "hfgi_store.glsl"
 
-// Value i of binding 1's words (HFGI_LOAD's layout, through the texel view).
-float vis_at(uint i) {
-    if (HFGI_HALF != 0u) return unpackHalf2x16(texelFetch(hfgi_vis_texels, int(i >> 1u)).x)[i & 1u];
-    return uintBitsToFloat(texelFetch(hfgi_vis_texels, int(i)).x);
-}
+#define vis_at(i) HFGI_LOAD_TEXEL(hfgi_vis_texels, i)
 
 // Texel `at` (plane · W·H + texel) of the shading planes.
 vec3 hfgi_out_get(uint at) {

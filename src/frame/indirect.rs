@@ -42,8 +42,8 @@ pub struct IndirectPass {
     pub radiance: RadiancePyramid,
     /// The max pyramid the scan's bound reads ([`uses_max_bound`]).
     pub max: Option<MaxPyramid>,
-    /// The scan's pipelines with their sets, by whether their dispatches use the max-pyramid
-    /// bound ([`scan::bounded`]): one per kind the scene's bounces need.
+    /// The scan's pipelines with their sets, by what each compiles in ([`ScanKind`]: the
+    /// max-pyramid bound, the radial probes): one per kind the scene's bounces need.
     scans: Vec<(ScanKind, ComputePipeline, vk::DescriptorSet)>,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
@@ -206,12 +206,8 @@ const U: usize = 3;
 /// The texel views of the scan's own buffers ([`buffer_sizes`]' order): the samples are
 /// `uvec4`s, the fold matrices, the radiance levels and `U` (which the scan writes as a storage
 /// buffer and the indirect shade reads through the view) 32-bit words.
-const BUFFER_VIEWS: [Option<vk::Format>; 4] = [
-    Some(vk::Format::R32G32B32A32_UINT),
-    Some(vk::Format::R32_UINT),
-    Some(vk::Format::R32_UINT),
-    Some(vk::Format::R32_UINT),
-];
+const BUFFER_VIEWS: [vk::Format; 4] =
+    [vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
 
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
@@ -241,11 +237,7 @@ impl IndirectPass {
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
             let sizes = buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len());
             for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
-                let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
-                bufs.push(match view {
-                    Some(format) => b.with_texel_view(ctx, format)?,
-                    None => b,
-                });
+                bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
             }
             let rad = radiance.insert(radiance_pyramid(ctx, scene, (ww as usize, wh as usize), &levels, shade)?);
             // Radiance level 0 read as the bilinear image through the stack too (with f16 storage

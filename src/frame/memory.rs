@@ -332,7 +332,6 @@ mod tests {
             max_storage_buffer_range: u32::MAX,
             max_memory_allocation_size: 1 << 40,
             max_texel_buffer_elements: (largest - 1) as u32,
-            max_uniform_buffer_range: 65536,
         };
         let err = check_fits(&e, &info).expect_err("texel limit").to_string();
         assert!(err.contains("maxTexelBufferElements") && err.contains("hfgi."), "{err}");

@@ -261,8 +261,9 @@ impl HeightPyramid {
         let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
         let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
         let made = (|| -> Result<()> {
-            // Texel views: the scan reads the stack and its planes through them, and in pyramid
-            // mode (no stack) binds the levels and the table in their place.
+            // Texel views: the scans, the shading and the synthesis read the levels through
+            // them, the scans the stack and its planes (in pyramid mode, with no stack, the levels
+            // and the table in their place).
             let lv = levels.insert(
                 Buffer::new(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, MemoryLocation::GpuOnly)?
                     .with_texel_view(ctx, vk::Format::R32_UINT)?,

@@ -158,13 +158,9 @@ impl VisibilityPass {
         let made = (|| -> Result<vk::DescriptorSet> {
             // Texel views (docs/performance.md §17): the samples as uvec4s, the fold as words,
             // V as words (written here as a storage buffer, read by shade.direct through the view).
-            let views = [Some(vk::Format::R32G32B32A32_UINT), Some(vk::Format::R32_UINT), Some(vk::Format::R32_UINT)];
+            let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
             for ((name, size), view) in sizes.into_iter().zip(views) {
-                let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
-                parts.push(match view {
-                    Some(format) => b.with_texel_view(ctx, format)?,
-                    None => b,
-                });
+                parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
             }
             if !samples.is_empty() {
                 memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;

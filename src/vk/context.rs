@@ -84,8 +84,6 @@ pub struct DeviceInfo {
     /// `maxTexelBufferElements`: the most texels a texel view may cover
     /// ([`crate::vk::Buffer::with_texel_view`]).
     pub max_texel_buffer_elements: u32,
-    /// `maxUniformBufferRange`: the largest uniform buffer a shader may bind.
-    pub max_uniform_buffer_range: u32,
 }
 
 struct Messenger {
@@ -439,7 +437,6 @@ impl Context {
             max_storage_buffer_range: props.limits.max_storage_buffer_range,
             max_memory_allocation_size: m3.max_memory_allocation_size,
             max_texel_buffer_elements: props.limits.max_texel_buffer_elements,
-            max_uniform_buffer_range: props.limits.max_uniform_buffer_range,
         }
     }
 

@@ -81,7 +81,11 @@ impl Buffer {
     /// must have been created with `UNIFORM_TEXEL_BUFFER` usage; the view is destroyed with it.
     /// On failure the buffer is destroyed.
     pub fn with_texel_view(mut self, ctx: &Context, format: vk::Format) -> Result<Self> {
-        let texel = if format == vk::Format::R32G32B32A32_UINT { 16 } else { 4 };
+        let texel = match format {
+            vk::Format::R32G32B32A32_UINT => 16,
+            vk::Format::R32G32_UINT => 8,
+            _ => 4, // R32_UINT, and the fewest bytes a texel has: never undercounts
+        };
         let max = ctx.info().max_texel_buffer_elements;
         if self.size / texel > u64::from(max) {
             let e = Error::param(
