@@ -369,11 +369,12 @@ fn gpu_matches_cpu_with_fewer_azimuths_in_later_bounces() {
     assert!(change > 5e-3, "the later bounce's azimuth set changed the indirect light by only {change:e}");
 }
 
-/// The scan's pipelines (docs/performance.md §12): with probes in the first bounce only, the
-/// later bounces' scan is a second pipeline with the max-pyramid bound compiled out; with probes
-/// in every bounce, or one bounce, one pipeline serves. (GPU = twin for both: the tests above.)
+/// The scan's pipelines (docs/performance.md §12, §17, §18): with probes in the first bounce
+/// only, the later bounces' scan is a second pipeline with the probes' code compiled out; with
+/// probes in every bounce, or one bounce, one pipeline serves. Both stop early against the max
+/// pyramid (§18). (GPU = twin for both: the tests above.)
 #[test]
-fn later_bounces_without_probes_get_a_scan_pipeline_without_the_bound() {
+fn later_bounces_without_probes_get_a_scan_pipeline_without_the_probes() {
     let ctx = gpu();
     let pipelines = |bounces: u32, later: u32| {
         let mut s = bright(rough_field(20, 14, 2));
@@ -387,7 +388,7 @@ fn later_bounces_without_probes_get_a_scan_pipeline_without_the_bound() {
     let (one, two, two_probed) = (pipelines(1, 0), pipelines(2, 0), pipelines(2, 1));
     eprintln!("pipelines: 1 bounce {one}, 2 bounces {two}, 2 probed bounces {two_probed}");
     assert_eq!(two, one + 1, "an unprobed later bounce has its own scan pipeline");
-    assert_eq!(two_probed, one, "probed bounces share the bounded pipeline");
+    assert_eq!(two_probed, one, "probed bounces share the probing pipeline");
 }
 
 /// What the next bounce starts from (docs/indirect.md §1): the indirect shade leaves in level 0

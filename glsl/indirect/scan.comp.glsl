@@ -19,9 +19,8 @@ layout(constant_id = 5) const uint HFGI_WRAP = 0u;
 layout(constant_id = 6) const uint HFGI_STATIC_FLAGS = 0u;
 layout(constant_id = 7) const uint HFGI_RSTACK = 1u;
 layout(constant_id = 8) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_store.glsl)
-// 0: the pipeline of bounces without the max-pyramid bound: its code is compiled out, not just
-// skipped (lavapipe runs a skipped branch on every lane; docs/performance.md §12).
-layout(constant_id = 9) const uint HFGI_BOUND = 1u;
+// (Constant 9, the max-pyramid bound's pipelines, is gone: the bound is now the early stop
+// alone, a comparison per sample; docs/performance.md §18.)
 // Coefficients of U stored and so accumulated (rules::scene::u_bands²): n², or only the bands a
 // diffuse surface's clamped-cosine lobe does not zero (order 4: 9), docs/indirect.md §4.
 layout(constant_id = 10) const int HFGI_NU = 16;
@@ -75,8 +74,6 @@ float hfgi_unexpose;
 
 float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_NU];
-uint hfgi_max_ov[HFGI_MAX_LEVELS]; // offsets of the ov levels (hfgi_max.glsl)
-uint hfgi_max_levels;
 // Radiance level 0, read once per receiver (radiance_begin): its size, the scale from level-0
 // height positions to its texels, and its channels' offsets and biases.
 ivec2 hfgi_r0_size;
@@ -96,22 +93,10 @@ void radiance_begin() {
     }
 }
 
-// The max pyramid's ov offsets (hfgi_max.glsl), once per receiver; returns the largest height.
+// The field's largest level-0 height (relative to level 0's bias): the max pyramid's 1 × 1 top
+// (hfgi_max.glsl), once per receiver, for the early stop.
 float max_begin(uvec2 n0) {
-    hfgi_max_levels = hfgi_max_count(n0);
-    for (uint l = 0u; l < hfgi_max_levels; ++l) hfgi_max_ov[l] = hfgi_max_offset(n0, l, true);
-    return hfgi_max(hfgi_max_ov[hfgi_max_levels - 1u]);
-}
-
-// An upper bound of the bilinear level-0 surface over the segment a–b (hfgi_max.glsl): the ov
-// cell of the finest level whose cells are at least as large as the segment's box.
-float max_over(vec2 a, vec2 b, uvec2 n0) {
-    vec2 lo = min(a, b), hi = max(a, b);
-    uint e = uint(ceil(max(hi.x - lo.x, hi.y - lo.y)));
-    uint level = min(e <= 1u ? 0u : uint(findMSB(e - 1u)) + 1u, hfgi_max_levels - 1u);
-    uvec2 s = hfgi_max_size(n0, level);
-    ivec2 c = clamp(ivec2(floor(lo / float(1u << level))), ivec2(0), ivec2(s) - 1);
-    return hfgi_max(hfgi_max_ov[level] + uint(c.y) * s.x + uint(c.x));
+    return hfgi_max(hfgi_max_offset(n0, hfgi_max_count(n0) - 1u, false));
 }
 
 // CONVENTIONS.md height gradient at texel (i, j) of level 0 (one-sided at the border, periodic
@@ -226,30 +211,68 @@ void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running
     running_slope = slope;
 }
 
-// The casting set along direction d from the running horizon `running` (eq. 6, 12): the ladder
-// samples and, before each, its radial probes (docs/indirect.md §2), with the max-pyramid bound
-// when `bounded` (`gmax`: the field's largest height; `bmin`: the receiver's lowest base).
+// The early stop (with `bounded`, the field's largest height known): no position at step t or
+// farther can be a member (its slope ≤ (gmax − bmin)/(t·texel) ≤ the running slope), so the ray
+// ends there. Conservative: the members are the same (docs/accuracy.md §4).
+bool hfgi_nothing_beyond(bool bounded, float gmax, float bmin, float running_slope, float t, float texel) {
+    return bounded && gmax - bmin <= running_slope * (t * texel);
+}
+
+// The casting set along direction d from the running horizon `running` (eq. 6, 12), without
+// radial probes (the later bounces' pipeline; presets without probes). "While-while" (Aila &
+// Laine 2009): the inner loop only advances to the next member, and the member's work
+// (elevation moments, radiance, accumulation) runs in the outer loop: lavapipe executes every
+// branch of a loop body on all its SIMD lanes (docs/performance.md §5). The inner loop carries
+// only the sample's index and step, and compares Δh with running_slope · t · texel (eq. 15
+// multiplied out: no division per sample; a member's slope is divided out once; §18).
+void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
+                    inout vec3 u[HFGI_NE]) {
+    float running_slope = tan(running);
+    int i = scan.first;
+    float t = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
+    bool more = true;
+    while (more) {
+        bool found = false;
+        float dh = 0.0;
+        while (true) {
+            vec2 q = scan.p + t * d;
+            if (i >= scan.end || !hfgi_scan_inside(scan, q) ||
+                hfgi_nothing_beyond(bounded, gmax, bmin, running_slope, t, scan.texel_size)) {
+                more = false;
+                break;
+            }
+            uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
+            dh = hfgi_height_at(scan, lv, q) - hfgi_base[lv];
+            if (dh > running_slope * (t * scan.texel_size)) {
+                found = true;
+                break;
+            }
+            ++i;
+            t *= ratio;
+        }
+        if (found) {
+            cast_member(u, running, running_slope, dh / (t * scan.texel_size), i, scan.p + t * d, d, scan, wrap);
+            ++i;
+            t *= ratio;
+        }
+    }
+}
+
+// The same with radial probes (docs/indirect.md §2): before each ladder sample more than a
+// texel past the previous one, level-0 samples in the gap, at most one per texel of it (thin
+// spikes the ladder steps over; docs/accuracy.md §4). One loop over probes and samples, not two
+// nested: lavapipe pays for an inner loop even when it runs no iteration.
 void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
               inout vec3 u[HFGI_NE]) {
     float running_slope = tan(running);
-    // One loop over the ladder samples and, before each, its radial probes: level-0
-    // samples between ladder samples more than a texel apart, at most one per texel of the
-    // gap (thin spikes the ladder steps over; docs/accuracy.md §4). One loop, not two
-    // nested: lavapipe pays for an inner loop even when it runs no iteration.
-    // "While-while" (Aila & Laine 2009): the inner loop only advances until the next member,
-    // and the member's work (elevation moments, radiance, accumulation) runs in the outer loop.
-    // lavapipe executes every branch of a loop body on all its SIMD lanes, so with the member
-    // inside the sample loop every sample paid for a member (docs/performance.md §5).
     float t_prev = 0.0, t = 0.0;
-    vec2 q = scan.p;
     uint lv = 0u;
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
     bool more = true;
     float t_next = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
     while (more) {
         bool found = false;
-        float sp = 0.0;
-        vec2 qp = q;
+        float dh = 0.0, tp = t;
         int im = i;
         while (true) {
             if (i >= scan.end) {
@@ -259,38 +282,22 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
             if (np < 0) {
                 t = t_next;
                 t_next *= ratio;
-                q = scan.p + t * d;
-                if (!hfgi_scan_inside(scan, q)) {
+                if (!hfgi_scan_inside(scan, scan.p + t * d)) {
                     more = false;
                     break;
                 }
                 lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-                // The max pyramid's bound: nothing past t_prev can rise above the running
-                // slope → stop; nothing on level 0 in (t_prev, t] can → no probes, and no
-                // sample when it reads level 0. Conservative: the members are the same.
-                bool clear = false;
-                if (bounded) {
-                    if (t_prev > 0.0 && gmax - bmin <= running_slope * t_prev * scan.texel_size) {
-                        more = false;
-                        break;
-                    }
-                    float m = max_over(scan.p + t_prev * d, q, uvec2(scan.n0)) - hfgi_base[0];
-                    clear = m <= running_slope * (m > 0.0 ? t_prev : t) * scan.texel_size;
-                }
-                np = clear || HFGI_PROBES == 0u ? 0 : clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
+                np = clamp(int(ceil(t - t_prev)) - 1, 0, int(pc.probes));
                 s2 = 1;
-                if (clear && lv == 0u) {
-                    t_prev = t;
-                    ++i;
-                    np = -1;
-                    continue;
-                }
             }
-            bool probe = HFGI_PROBES != 0u && s2 <= np;
-            float tp = HFGI_PROBES == 0u ? t : probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
-            qp = scan.p + tp * d;
+            bool probe = s2 <= np;
+            tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
+            if (hfgi_nothing_beyond(bounded, gmax, bmin, running_slope, tp, scan.texel_size)) {
+                more = false;
+                break;
+            }
             uint lq = probe ? 0u : lv;
-            sp = (hfgi_height_at(scan, lq, qp) - hfgi_base[lq]) / (tp * scan.texel_size);
+            dh = hfgi_height_at(scan, lq, scan.p + tp * d) - hfgi_base[lq];
             im = i;
             if (probe) {
                 ++s2;
@@ -299,12 +306,12 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
                 ++i;
                 np = -1;
             }
-            if (sp > running_slope) {
+            if (dh > running_slope * (tp * scan.texel_size)) {
                 found = true;
                 break;
             }
         }
-        if (found) cast_member(u, running, running_slope, sp, im, qp, d, scan, wrap);
+        if (found) cast_member(u, running, running_slope, dh / (tp * scan.texel_size), im, scan.p + tp * d, d, scan, wrap);
     }
 }
 
@@ -325,7 +332,7 @@ void main() {
         hfgi_base[l] = hfgi_scan_base(scan, uint(l));
         bmin = min(bmin, hfgi_base[l]);
     }
-    bool bounded = HFGI_BOUND != 0u && (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
+    bool bounded = (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
     float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     radiance_begin();
     hfgi_unexpose = 1.0 / pc.radiance_scale;
@@ -349,7 +356,11 @@ void main() {
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }
-        scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
+        if (HFGI_PROBES == 0u) {
+            scan_ray_plain(scan, d, wrap, bounded, gmax, bmin, running, u);
+        } else {
+            scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
+        }
         // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows).
         uint base = j * uint(HFGI_N2 * HFGI_NE);
         for (int k = 0; k < HFGI_NU; ++k) {

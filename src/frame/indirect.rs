@@ -233,7 +233,7 @@ impl IndirectPass {
         let mut radiance = None;
         let mut max = None;
         let has_max = uses_max_bound(scene);
-        let kinds = scan_kinds(scene, has_max);
+        let kinds = scan_kinds(scene);
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
             let sizes = buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len());
             for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
@@ -353,8 +353,7 @@ impl IndirectPass {
     /// `indirect.scan`).
     pub fn record_scan(&self, rec: &mut Recorder, bounce: u32) {
         let probes = self.probes[(bounce > 1) as usize];
-        let kind = ScanKind::of(self.max.is_some(), probes);
-        let bound = kind.bound;
+        let kind = ScanKind::of(probes);
         // The pipeline of this kind, else one that serves it exactly (scan_kinds creates one).
         let (_, scan, set) = self
             .scans
@@ -368,7 +367,8 @@ impl IndirectPass {
                 groups(self.push.work_height, crate::constants::WORKGROUP),
                 1,
             ];
-            let bound = if bound { FLAG_MAX_BOUND } else { 0 };
+            // Every bounce stops early when the pass has the max pyramid (docs/performance.md §18).
+            let bound = if self.max.is_some() { FLAG_MAX_BOUND } else { 0 };
             // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into U.
             for (i, (first, count)) in self.chunks[(bounce > 1) as usize].iter().enumerate() {
                 let flags = self.push.flags | bound | if i > 0 { FLAG_ACCUMULATE } else { 0 };

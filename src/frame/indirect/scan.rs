@@ -47,44 +47,36 @@ pub(super) fn scan_push(
     }
 }
 
-/// Whether a bounce's scan reads the max-pyramid bound: the pass has the max pyramid and the
-/// bounce probes. The bound pays where it saves probes; without probes it costs more than it
-/// saves (docs/accuracy.md §4), and its pipeline is then compiled without it (§12 of
-/// docs/performance.md).
-pub(super) fn bounded(has_max: bool, probes: u32) -> bool {
-    has_max && probes > 0
-}
-
-/// What a scan pipeline compiles in (specialization constants 9 and 11 of
-/// `glsl/indirect/scan.comp.glsl`): the max-pyramid bound, and the radial probes. lavapipe runs
-/// code on every lane whether a uniform flag skips it or not (docs/performance.md §12, §17).
+/// What a scan pipeline compiles in (specialization constant 11 of
+/// `glsl/indirect/scan.comp.glsl`): the radial probes. lavapipe runs code on every lane whether
+/// a uniform flag skips it or not (docs/performance.md §12, §17). The max-pyramid bound is no
+/// longer a kind (§18): it is the early stop alone, a comparison per sample, and every bounce of
+/// a pass with the max pyramid stops early (`HFGI_FLAG_MAX_BOUND`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct ScanKind {
-    pub bound: bool,
     pub probes: bool,
 }
 
 impl ScanKind {
     /// The kind that scans a bounce with `probes` radial probes exactly and fastest.
-    pub fn of(has_max: bool, probes: u32) -> Self {
-        Self { bound: bounded(has_max, probes), probes: probes > 0 }
+    pub fn of(probes: u32) -> Self {
+        Self { probes: probes > 0 }
     }
 
-    /// Whether a pipeline of this kind scans a bounce of kind `k` exactly: the bound is a
-    /// dynamic flag (a bounded pipeline without it scans unbounded) and probes are a dynamic
+    /// Whether a pipeline of this kind scans a bounce of kind `k` exactly: probes are a dynamic
     /// count (probe code with 0 probes scans none); compiled-out code cannot run.
     pub fn serves(self, k: ScanKind) -> bool {
-        (self.bound || !k.bound) && (self.probes || !k.probes)
+        self.probes || !k.probes
     }
 }
 
 /// The scan pipelines a scene gets: the first bounce's kind and, when later bounces differ,
 /// theirs: when the scene has later bounces, or when the first's pipeline could not scan one
 /// (a bounce past `gi.bounces` takes the first otherwise, which scans it exactly).
-pub(super) fn scan_kinds(scene: &Scene, has_max: bool) -> Vec<ScanKind> {
+pub(super) fn scan_kinds(scene: &Scene) -> Vec<ScanKind> {
     let gi = &scene.gi;
-    let first = ScanKind::of(has_max, gi.probes(1));
-    let later = ScanKind::of(has_max, gi.probes(2));
+    let first = ScanKind::of(gi.probes(1));
+    let later = ScanKind::of(gi.probes(2));
     if later != first && (gi.bounces > 1 || !first.serves(later)) {
         vec![first, later]
     } else {
@@ -93,7 +85,7 @@ pub(super) fn scan_kinds(scene: &Scene, has_max: bool) -> Vec<ScanKind> {
 }
 
 /// The scan's specialization constants (`glsl/indirect/scan.comp.glsl`) for `n_v` height levels
-/// and the creation push `push`: the bound's and the probes' code compiled in or out by `kind`.
+/// and the creation push `push`: the probes' code compiled in or out by `kind`.
 pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: ScanKind) -> Vec<(u32, u32)> {
     let gi = &scene.gi;
     let n = gi.sh_order;
@@ -104,7 +96,6 @@ pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: Sc
         (3, elevation::gpu_size(gi.elevation_basis, n) as u32),
         (7, push.radiance_stack),
         (8, gi.storage.spec()),
-        (9, kind.bound as u32),
         (10, u_coefficients(scene) as u32),
         (11, kind.probes as u32),
     ];
@@ -174,28 +165,27 @@ impl<T> PushGet<T> for Vec<T> {
 mod tests {
     use super::*;
 
-    /// The pipelines a scene gets (docs/performance.md §12, §17): `default` with 2 bounces a
-    /// bounded, probing first one and a bare second; one bounce, only the first; probes in the
-    /// later bounces only, both even with one bounce (a bounce past `gi.bounces` needs the
-    /// probes' code, which the first lacks). Every kind serves itself, and only a kind with at
-    /// least its code serves another.
+    /// The pipelines a scene gets (docs/performance.md §12, §17, §18): `default` with 2 bounces
+    /// a probing first one and a bare second; one bounce, only the first; probes in the later
+    /// bounces only, both even with one bounce (a bounce past `gi.bounces` needs the probes'
+    /// code, which the first lacks). Every kind serves itself, and only the probing kind serves
+    /// the other.
     #[test]
     fn scan_kinds_cover_every_bounce_with_code_it_runs() {
         let mut s = crate::scene::file::default_scene().expect("default scene");
         s.gi.bounces = 2;
-        let full = ScanKind { bound: true, probes: true };
-        let bare = ScanKind { bound: false, probes: false };
-        assert_eq!(scan_kinds(&s, true), vec![full, bare]);
-        assert_eq!(scan_kinds(&s, false), vec![ScanKind { bound: false, probes: true }, bare]);
+        let (probing, bare) = (ScanKind { probes: true }, ScanKind { probes: false });
+        assert_eq!(scan_kinds(&s), vec![probing, bare]);
         s.gi.bounces = 1;
-        assert_eq!(scan_kinds(&s, true), vec![full]);
+        assert_eq!(scan_kinds(&s), vec![probing]);
         (s.gi.radial_probes, s.gi.radial_probes_later) = (0, 1);
-        assert_eq!(scan_kinds(&s, true), vec![bare, full]);
-        let (probing, bounding) = (ScanKind { bound: false, probes: true }, ScanKind { bound: true, probes: false });
-        for a in [full, bare, probing, bounding] {
-            assert!(a.serves(a) && full.serves(a), "{a:?}");
-            assert_eq!(bare.serves(a), a == bare, "{a:?}");
+        assert_eq!(scan_kinds(&s), vec![bare, probing]);
+        (s.gi.radial_probes, s.gi.radial_probes_later) = (0, 0);
+        s.gi.bounces = 3;
+        assert_eq!(scan_kinds(&s), vec![bare]);
+        for a in [probing, bare] {
+            assert!(a.serves(a) && probing.serves(a), "{a:?}");
         }
-        assert!(!probing.serves(bounding) && !bounding.serves(probing));
+        assert!(!bare.serves(probing));
     }
 }
