@@ -1,5 +1,6 @@
 #version 460
 #extension GL_EXT_control_flow_attributes : require
+#extension GL_KHR_shader_subgroup_vote : require
 // Indirect radiance vectors (NS09 §3, §5.2–5.3, §6; docs/indirect.md §2–3) at every receiver of
 // the working grid. Per azimuth φ_j: scan the height pyramid with the steps of eq. 14–16, keep
 // the casting set (eq. 6: samples whose blocking angle exceeds ω_min and every nearer sample),
@@ -28,6 +29,7 @@ layout(constant_id = 10) const int HFGI_NU = 16;
 // sample, and their loop state) is compiled out (docs/performance.md §17).
 layout(constant_id = 11) const uint HFGI_PROBES = 1u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
+const int HFGI_QUEUE = 2; // members a lane may hold before the subgroup casts (docs/performance.md §18)
 
 layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels; // the height levels (f32 bits), a texel buffer
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
@@ -218,63 +220,106 @@ bool hfgi_nothing_beyond(bool bounded, float gmax, float bmin, float running_slo
     return bounded && gmax - bmin <= running_slope * (t * texel);
 }
 
+// Members a lane has found and not yet cast, in order (docs/performance.md §18): Δh, the step t
+// and the ladder sample index of each. A lane walks on past its members while the subgroup's
+// other lanes look for theirs; the subgroup casts when one lane's queue is full, one member per
+// lane, so lanes neither wait for one another's members nor cast alone.
+struct hfgi_Queue {
+    float dh[HFGI_QUEUE];
+    float t[HFGI_QUEUE];
+    int i[HFGI_QUEUE];
+    int count;
+};
+
+hfgi_Queue queue_empty() {
+    hfgi_Queue m;
+    [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
+        m.dh[k] = 0.0;
+        m.t[k] = 1.0;
+        m.i[k] = 0;
+    }
+    m.count = 0;
+    return m;
+}
+
+// A sample at step t with height difference dh (eq. 15 multiplied out): if it rises above the
+// walk's horizon it is a member: queued, and the walk's horizon becomes its slope.
+void queue_sample(inout hfgi_Queue m, inout float walk_slope, float dh, float t, int i, float texel) {
+    if (dh > walk_slope * (t * texel)) {
+        walk_slope = dh / (t * texel);
+        [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
+            if (k == m.count) {
+                m.dh[k] = dh;
+                m.t[k] = t;
+                m.i[k] = i;
+            }
+        }
+        ++m.count;
+    }
+}
+
+// Casts the oldest queued member, if any (cast_member: over [running, its ω)).
+void queue_cast(inout hfgi_Queue m, inout vec3 u[HFGI_NE], inout float running, inout float running_slope,
+                hfgi_Scan scan, vec2 d, bool wrap) {
+    if (m.count == 0) return;
+    float slope = m.dh[0] / (m.t[0] * scan.texel_size);
+    cast_member(u, running, running_slope, slope, m.i[0], scan.p + m.t[0] * d, d, scan, wrap);
+    [[unroll]] for (int k = 0; k + 1 < HFGI_QUEUE; ++k) {
+        m.dh[k] = m.dh[k + 1];
+        m.t[k] = m.t[k + 1];
+        m.i[k] = m.i[k + 1];
+    }
+    --m.count;
+}
+
 // The casting set along direction d from the running horizon `running` (eq. 6, 12), without
-// radial probes (the later bounces' pipeline; presets without probes). "While-while" (Aila &
-// Laine 2009): the inner loop only advances to the next member, and the member's work
-// (elevation moments, radiance, accumulation) runs in the outer loop: lavapipe executes every
-// branch of a loop body on all its SIMD lanes (docs/performance.md §5). The inner loop carries
-// only the sample's index and step, and compares Δh with running_slope · t · texel (eq. 15
-// multiplied out: no division per sample; a member's slope is divided out once; §18).
+// radial probes (the later bounces' pipeline; presets without probes). The inner loop only
+// walks and queues members; the outer loop casts them (elevation moments, radiance,
+// accumulation): lavapipe executes every branch of a loop body on all its SIMD lanes
+// (docs/performance.md §5). It compares Δh with the horizon's slope · t · texel (no division
+// per sample), and leaves when this lane has ended or holds a full queue, or when any lane of
+// the subgroup holds a full queue (§18).
 void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
                     inout vec3 u[HFGI_NE]) {
-    float running_slope = tan(running);
+    float running_slope = tan(running); // of the members cast
+    float walk_slope = running_slope;   // of the members found, cast or queued
     int i = scan.first;
     float t = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
     bool more = true;
-    while (more) {
-        bool found = false;
-        float dh = 0.0;
-        while (true) {
+    hfgi_Queue m = queue_empty();
+    while (more || m.count > 0) {
+        while (more && m.count < HFGI_QUEUE) {
             vec2 q = scan.p + t * d;
             if (i >= scan.end || !hfgi_scan_inside(scan, q) ||
-                hfgi_nothing_beyond(bounded, gmax, bmin, running_slope, t, scan.texel_size)) {
+                hfgi_nothing_beyond(bounded, gmax, bmin, walk_slope, t, scan.texel_size)) {
                 more = false;
                 break;
             }
             uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-            dh = hfgi_height_at(scan, lv, q) - hfgi_base[lv];
-            if (dh > running_slope * (t * scan.texel_size)) {
-                found = true;
-                break;
-            }
+            queue_sample(m, walk_slope, hfgi_height_at(scan, lv, q) - hfgi_base[lv], t, i, scan.texel_size);
             ++i;
             t *= ratio;
+            if (subgroupAny(m.count == HFGI_QUEUE)) break;
         }
-        if (found) {
-            cast_member(u, running, running_slope, dh / (t * scan.texel_size), i, scan.p + t * d, d, scan, wrap);
-            ++i;
-            t *= ratio;
-        }
+        queue_cast(m, u, running, running_slope, scan, d, wrap);
     }
 }
 
 // The same with radial probes (docs/indirect.md §2): before each ladder sample more than a
 // texel past the previous one, level-0 samples in the gap, at most one per texel of it (thin
-// spikes the ladder steps over; docs/accuracy.md §4). One loop over probes and samples, not two
-// nested: lavapipe pays for an inner loop even when it runs no iteration.
+// spikes the ladder steps over; docs/accuracy.md §4). One walk over probes and samples, not two
+// nested loops: lavapipe pays for an inner loop even when it runs no iteration.
 void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
               inout vec3 u[HFGI_NE]) {
-    float running_slope = tan(running);
+    float running_slope = tan(running), walk_slope = running_slope;
     float t_prev = 0.0, t = 0.0;
     uint lv = 0u;
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
     bool more = true;
     float t_next = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
-    while (more) {
-        bool found = false;
-        float dh = 0.0, tp = t;
-        int im = i;
-        while (true) {
+    hfgi_Queue m = queue_empty();
+    while (more || m.count > 0) {
+        while (more && m.count < HFGI_QUEUE) {
             if (i >= scan.end) {
                 more = false;
                 break;
@@ -291,14 +336,14 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
                 s2 = 1;
             }
             bool probe = s2 <= np;
-            tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
-            if (hfgi_nothing_beyond(bounded, gmax, bmin, running_slope, tp, scan.texel_size)) {
+            float tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
+            if (hfgi_nothing_beyond(bounded, gmax, bmin, walk_slope, tp, scan.texel_size)) {
                 more = false;
                 break;
             }
             uint lq = probe ? 0u : lv;
-            dh = hfgi_height_at(scan, lq, scan.p + tp * d) - hfgi_base[lq];
-            im = i;
+            float dh = hfgi_height_at(scan, lq, scan.p + tp * d) - hfgi_base[lq];
+            queue_sample(m, walk_slope, dh, tp, i, scan.texel_size); // a probe reads sample i's radiance level
             if (probe) {
                 ++s2;
             } else {
@@ -306,12 +351,9 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
                 ++i;
                 np = -1;
             }
-            if (dh > running_slope * (tp * scan.texel_size)) {
-                found = true;
-                break;
-            }
+            if (subgroupAny(m.count == HFGI_QUEUE)) break;
         }
-        if (found) cast_member(u, running, running_slope, dh / (tp * scan.texel_size), im, scan.p + tp * d, d, scan, wrap);
+        queue_cast(m, u, running, running_slope, scan, d, wrap);
     }
 }
 

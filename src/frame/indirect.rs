@@ -33,6 +33,7 @@ use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
 
 mod scan;
+pub(crate) use scan::check_subgroup_vote;
 use scan::{scan_chunks, scan_kinds, scan_pipelines, scan_push, PushGet, ScanKind};
 
 pub const STAGE_SCAN: &str = super::stages::stage_name("indirect.scan");
@@ -219,6 +220,7 @@ impl IndirectPass {
         blockers: Option<&Buffer>,
         scene: &Scene,
     ) -> Result<Self> {
+        check_subgroup_vote(ctx.info())?;
         let gi = &scene.gi;
         let (ww, wh) = pyramid.work();
         let data = ScanData::new(scene, pyramid.layout().count());

@@ -237,7 +237,8 @@ const TEXEL_VIEWED: [&str; 13] = [
 /// `render`'s and `plan`'s checks of a scene against a device, before any GPU work (docs/
 /// robustness.md, "Early, consistent checks"): the field within `maxImageDimension2D`, and the
 /// renderer's and the view pass's memory ([`renderer`], [`view()`] with the default options)
-/// within the device ([`check_fits`]). Returns the estimate.
+/// within the device ([`check_fits`]), and with indirect light subgroup vote in compute shaders
+/// (the indirect scan's walk, docs/performance.md §18). Returns the estimate.
 pub fn check_device(scene: &Scene, info: &crate::vk::DeviceInfo) -> Result<MemoryEstimate> {
     let (w, h) = (scene.field.width(), scene.field.height());
     let max = info.max_image_dimension_2d;
@@ -248,6 +249,9 @@ pub fn check_device(scene: &Scene, info: &crate::vk::DeviceInfo) -> Result<Memor
             height: h,
             max,
         });
+    }
+    if Planner::new(scene).creates_indirect() {
+        super::indirect::check_subgroup_vote(info)?;
     }
     let mut e = renderer(scene)?;
     e.append(view(scene, &ViewOptions::default())?);
@@ -332,6 +336,7 @@ mod tests {
             max_storage_buffer_range: u32::MAX,
             max_memory_allocation_size: 1 << 40,
             max_texel_buffer_elements: (largest - 1) as u32,
+            subgroup_vote_compute: true,
         };
         let err = check_fits(&e, &info).expect_err("texel limit").to_string();
         assert!(err.contains("maxTexelBufferElements") && err.contains("hfgi."), "{err}");

@@ -84,6 +84,10 @@ pub struct DeviceInfo {
     /// `maxTexelBufferElements`: the most texels a texel view may cover
     /// ([`crate::vk::Buffer::with_texel_view`]).
     pub max_texel_buffer_elements: u32,
+    /// `VkPhysicalDeviceSubgroupProperties`: `supportedStages` has `COMPUTE` and
+    /// `supportedOperations` has `VOTE` (`subgroupAny`; the indirect scan's walk,
+    /// docs/performance.md §18).
+    pub subgroup_vote_compute: bool,
 }
 
 struct Messenger {
@@ -401,7 +405,9 @@ impl Context {
     fn describe(instance: &ash::Instance, pd: vk::PhysicalDevice, family: u32) -> DeviceInfo {
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
         let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
-        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut m3);
+        let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut p2 =
+            vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut m3).push_next(&mut sub);
         unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
         let props = p2.properties;
         let mem = unsafe { instance.get_physical_device_memory_properties(pd) };
@@ -437,6 +443,8 @@ impl Context {
             max_storage_buffer_range: props.limits.max_storage_buffer_range,
             max_memory_allocation_size: m3.max_memory_allocation_size,
             max_texel_buffer_elements: props.limits.max_texel_buffer_elements,
+            subgroup_vote_compute: sub.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+                && sub.supported_operations.contains(vk::SubgroupFeatureFlags::VOTE),
         }
     }
 

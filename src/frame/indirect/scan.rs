@@ -70,6 +70,21 @@ impl ScanKind {
     }
 }
 
+/// The device capability the scan's walk needs (docs/performance.md §18, docs/integration.md):
+/// `subgroupAny` in compute shaders (`VK_SUBGROUP_FEATURE_VOTE_BIT` in `supportedOperations`,
+/// `COMPUTE` in `supportedStages`), which every Vulkan 1.3 GPU driver and lavapipe report.
+pub(crate) fn check_subgroup_vote(info: &crate::vk::DeviceInfo) -> Result<()> {
+    if info.subgroup_vote_compute {
+        return Ok(());
+    }
+    Err(crate::error::Error::Unsupported(format!(
+        "{}: the indirect scan needs subgroup vote operations (subgroupAny) in compute shaders \
+         (VkPhysicalDeviceSubgroupProperties: VOTE in supportedOperations, COMPUTE in supportedStages); \
+         render without indirect light (gi.bounces = 0) on this device",
+        info.name
+    )))
+}
+
 /// The scan pipelines a scene gets: the first bounce's kind and, when later bounces differ,
 /// theirs: when the scene has later bounces, or when the first's pipeline could not scan one
 /// (a bounce past `gi.bounces` takes the first otherwise, which scans it exactly).
@@ -170,6 +185,36 @@ mod tests {
     /// bounces only, both even with one bounce (a bounce past `gi.bounces` needs the probes'
     /// code, which the first lacks). Every kind serves itself, and only the probing kind serves
     /// the other.
+    /// A device without subgroup vote in compute is refused by name, before any GPU work
+    /// (`render` and `plan` through `memory::check_device`, an embedding through
+    /// `IndirectPass::new`); a scene without indirect light does not need it.
+    #[test]
+    fn a_device_without_subgroup_vote_is_refused_for_indirect_light() {
+        let mut scene = crate::scene::file::default_scene().expect("default scene");
+        scene.gi.bounces = 1;
+        let mut info = crate::vk::DeviceInfo {
+            name: "test device".into(),
+            kind: ash::vk::PhysicalDeviceType::CPU,
+            driver: String::new(),
+            api_version: (1, 3, 0),
+            max_image_dimension_2d: 16384,
+            timestamp_period: 1.0,
+            timestamp_valid_bits: 64,
+            device_local_heap_bytes: 1 << 40,
+            max_storage_buffer_range: u32::MAX,
+            max_memory_allocation_size: 1 << 40,
+            max_texel_buffer_elements: u32::MAX,
+            subgroup_vote_compute: false,
+        };
+        let err = crate::frame::memory::check_device(&scene, &info).expect_err("no vote").to_string();
+        assert!(err.contains("test device") && err.contains("subgroupAny") && err.contains("gi.bounces = 0"), "{err}");
+        scene.gi.bounces = 0;
+        crate::frame::memory::check_device(&scene, &info).expect("no indirect light, no scan");
+        scene.gi.bounces = 1;
+        info.subgroup_vote_compute = true;
+        crate::frame::memory::check_device(&scene, &info).expect("vote in compute");
+    }
+
     #[test]
     fn scan_kinds_cover_every_bounce_with_code_it_runs() {
         let mut s = crate::scene::file::default_scene().expect("default scene");
