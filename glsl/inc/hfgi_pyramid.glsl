@@ -42,7 +42,7 @@ const uint HFGI_FLAG_RAW_LEVEL0 = 1u; // level 0 is the bilinear surface itself,
 const uint HFGI_FLAG_HORIZON_SAMPLES = 2u; // ω_max = largest sample, not eq. 17's spline maximum
 const uint HFGI_FLAG_TANGENT = 4u; // ω_min = the exact tangent elevation, not −asin(N·d)
 const uint HFGI_FLAG_ACCUMULATE = 8u; // add to the output (a later azimuth chunk of the same set)
-const uint HFGI_FLAG_MAX_BOUND = 16u; // the indirect scan skips what the max pyramid rules out
+const uint HFGI_FLAG_MAX_BOUND = 16u; // the indirect scan stops where the max pyramid's top rules the rest out
 const uint HFGI_FLAG_SWEEP = 32u; // visibility: ω_max from the line sweep's horizons, no scan
 // The height (radiance) stack's plane 0 holds level 0's own values (HeightPyramid::
 // set_raw_plane0): with HFGI_FLAG_RAW_LEVEL0, level 0 is read through the stack like every other

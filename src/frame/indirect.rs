@@ -10,8 +10,9 @@
 //!   level 0 of the radiance pyramid (after this bounce's scan has read the pyramid).
 //!
 //! With [`uses_max_bound`] the pass also owns the max pyramid (stage `pyramid.max`,
-//! [`MaxPyramid`]; the renderer records it when the heights change) and the scan skips what it
-//! rules out (docs/accuracy.md §4). Barriers: compute→compute after each stage.
+//! [`MaxPyramid`]; the renderer records it when the heights change), and every bounce's scan
+//! stops each ray where nothing farther can rise above its horizon (docs/accuracy.md §4,
+//! docs/performance.md §18). Barriers: compute→compute after each stage.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -41,7 +42,7 @@ pub const STAGE_SHADE: &str = super::stages::stage_name("indirect.shade");
 
 pub struct IndirectPass {
     pub radiance: RadiancePyramid,
-    /// The max pyramid the scan's bound reads ([`uses_max_bound`]).
+    /// The max pyramid whose top the scan's early stop reads ([`uses_max_bound`]).
     pub max: Option<MaxPyramid>,
     /// The scan's pipelines with their sets, by what each compiles in ([`ScanKind`]: the
     /// max-pyramid bound, the radial probes): one per kind the scene's bounces need.

@@ -363,7 +363,8 @@ impl Planner {
             if self.no_indirect().is_none() {
                 match self.no_max_bound {
                     None => {
-                        let r = "the indirect scan bounds its radial probes by level-0 maxima";
+                        let r = "the indirect scan stops each ray where nothing farther can rise above \
+                                 its horizon (level-0 maxima)";
                         add(&mut stages, Stage::PyramidMax, r.into());
                     }
                     Some(why) => add(&mut omitted, Stage::PyramidMax, why.into()),

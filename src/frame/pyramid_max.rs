@@ -1,6 +1,8 @@
-//! Stage `pyramid.max` (docs/accuracy.md §4): the max pyramid of the level-0 heights, which
-//! lets the indirect scan skip the parts of a ray that cannot hold a casting-set member and stop
-//! where nothing farther can rise above its horizon. Layout and CPU twin:
+//! Stage `pyramid.max` (docs/accuracy.md §4): the max pyramid of the level-0 heights, whose
+//! 1 × 1 top (the field's largest height) lets the indirect scan stop each ray where nothing
+//! farther can rise above its horizon. (Until docs/performance.md §18 the scan also read its
+//! finer levels to skip the probes of gaps that could hold no member; on lavapipe that read cost
+//! more than it saved, so the scan reads only the top now.) Layout and CPU twin:
 //! [`crate::reference::max`]; shader `glsl/pyramid/max.comp.glsl`.
 //!
 //! Recorded after `pyramid.decimate` (it reads level 0 of the height pyramid's levels buffer)
@@ -23,10 +25,11 @@ use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
 
 pub const STAGE_MAX: &str = super::stages::stage_name("pyramid.max");
 
-/// Whether the indirect scan of `scene` reads the max pyramid: it has radial probes (the bound
-/// saves probes; without them it costs more than it saves, docs/accuracy.md §4), level 0 is the
-/// bilinear surface (the bound is over it) and the field is not periodic (the layout does not
-/// wrap).
+/// Whether the indirect scan of `scene` reads the max pyramid: it has radial probes (the stage
+/// was built for the probes' bound, docs/accuracy.md §4; since docs/performance.md §18 it serves
+/// the early stop of every bounce of such a scene, which would serve a scene without probes as
+/// well: not extended to them yet), level 0 is the bilinear surface (the bound is over it) and
+/// the field is not periodic (the layout does not wrap).
 pub fn uses_max_bound(scene: &Scene) -> bool {
     why_no_max_bound(scene).is_none()
 }

@@ -47,7 +47,8 @@ impl MaxLayout {
     }
 
     /// The bound of the bilinear level-0 surface over the segment `a`–`b` (level-0 positions),
-    /// as the indirect scan reads it (`max_over` in `glsl/indirect/scan.comp.glsl`).
+    /// as the indirect scan read it until docs/performance.md §18 (`max_over` in
+    /// `glsl/indirect/scan.comp.glsl`; the scan now reads only the top, the field's largest height).
     pub fn bound(&self, data: &[f32], a: [f64; 2], b: [f64; 2]) -> f32 {
         let lo = [a[0].min(b[0]), a[1].min(b[1])];
         let e = (a[0] - b[0]).abs().max((a[1] - b[1]).abs()).ceil() as usize;
