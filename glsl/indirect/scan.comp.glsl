@@ -73,6 +73,7 @@ float hfgi_unexpose;
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
 #include "hfgi_max.glsl"
+#include "hfgi_receiver.glsl"
 
 float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_NU];
@@ -358,7 +359,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
 }
 
 void main() {
-    uvec2 r = gl_GlobalInvocationID.xy;
+    uvec2 r = hfgi_receiver();
     if (r.x >= pc.work_width || r.y >= pc.work_height) return;
     bool wrap = HFGI_WRAP != 0u;
     hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
