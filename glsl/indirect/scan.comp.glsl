@@ -83,6 +83,8 @@ ivec2 hfgi_r0_size;
 vec2 hfgi_r0_raw_scale;
 uvec3 hfgi_r0_offset;
 vec3 hfgi_r0_bias;
+// The radiance stack's channel stride (its planes table's last entry), read once per receiver.
+uint hfgi_rstride;
 
 void radiance_begin() {
     hfgi_Level r0 = hfgi_radiance_table[0];
@@ -94,6 +96,7 @@ void radiance_begin() {
         hfgi_r0_offset[c] = l.offset;
         hfgi_r0_bias[c] = l.bias;
     }
+    hfgi_rstride = HFGI_RSTACK != 0u ? hfgi_rplanes(pc.radiance_planes).z : 0u;
 }
 
 // The field's largest level-0 height (relative to level 0's bias): the max pyramid's 1 × 1 top
@@ -157,7 +160,7 @@ vec3 radiance_rgb(uint lv, vec2 q, bool stack_mode, bool wrap, bool raw) {
             rad[c] = hfgi_bilerp(hfgi_radiance_levels(k.x) - b, hfgi_radiance_levels(k.y) - b,
                                  hfgi_radiance_levels(k.z) - b, hfgi_radiance_levels(k.w) - b, f);
         } else {
-            uvec4 k = at + c * hfgi_rplanes(pc.radiance_planes).z + plane.z; // lv < radiance_planes
+            uvec4 k = at + c * hfgi_rstride + plane.z; // lv < radiance_planes
             rad[c] = hfgi_bilerp(rstack_at(k.x), rstack_at(k.y),
                                  rstack_at(k.z), rstack_at(k.w), f);
             if (HFGI_HALF != 0u) rad[c] *= hfgi_unexpose;
