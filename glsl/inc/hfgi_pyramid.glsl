@@ -119,11 +119,11 @@ hfgi_Scan hfgi_scan_begin(uvec2 r, uvec2 work, uint level_step, uint level_bias,
                      -int(extent & 0xffffu), n_v + int(extent >> 16), l0);
 }
 
-// The near-field limit t → 0 of the blocking angle (with near_steps > 0; docs/accuracy.md §4):
+// The near-field limit t → 0 of the blocking angle's tangent (with near_steps > 0; docs/accuracy.md §4):
 // the slope of the bilinear level-0 surface at p along d, in the cell the ray enters (the
 // reference's first piece starts there). False where the ray leaves the domain at once.
-bool hfgi_scan_limit(hfgi_Scan s, vec2 d, out float omega) {
-    omega = -1.5707963267948966;
+bool hfgi_scan_limit_slope(hfgi_Scan s, vec2 d, out float slope) {
+    slope = -3.402823466e38;
     vec2 e = s.p + 1e-3 * d;
     if (!s.wrap && (e.x < 0.0 || e.y < 0.0 || e.x > s.n0.x - 1.0 || e.y > s.n0.y - 1.0)) return false;
     hfgi_Level l0 = hfgi_table[0];
@@ -133,8 +133,16 @@ bool hfgi_scan_limit(hfgi_Scan s, vec2 d, out float omega) {
     float h01 = hfgi_fetch(l0, c + ivec2(0, 1), s.wrap), h11 = hfgi_fetch(l0, c + ivec2(1, 1), s.wrap);
     float fx = (h10 - h00) * (1.0 - f.y) + (h11 - h01) * f.y;
     float fy = (h01 - h00) * (1.0 - f.x) + (h11 - h10) * f.x;
-    omega = atan((fx * d.x + fy * d.y) / s.texel_size);
+    slope = (fx * d.x + fy * d.y) / s.texel_size;
     return true;
+}
+
+// The same as an angle, atan of the slope (−π/2 where the ray leaves the domain at once).
+bool hfgi_scan_limit(hfgi_Scan s, vec2 d, out float omega) {
+    float slope;
+    bool inside = hfgi_scan_limit_slope(s, d, slope);
+    omega = inside ? atan(slope) : -1.5707963267948966;
+    return inside;
 }
 
 // The receiver's height at pyramid level `level` (eq. 15 compares f_L(q) with f_L(p)).

@@ -40,6 +40,24 @@ layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 float hfgi_omega[HFGI_NV];
 float hfgi_base[HFGI_NV];
 
+// tan ω_max along d with HFGI_FLAG_HORIZON_SAMPLES: the largest slope of the near-field limit and
+// the samples. atan is monotonic, so the largest angle is the atan of the largest slope: one atan
+// per ray instead of one per sample (docs/performance.md §18).
+float hfgi_horizon_slope(hfgi_Scan scan, vec2 d) {
+    float smax = -3.402823466e38; // atan: −π/2 (no sample)
+    float limit;
+    if (scan.first < 0 && hfgi_scan_limit_slope(scan, d, limit)) smax = limit;
+    float t = hfgi_scan_t(scan, scan.first, HFGI_NV), ratio = hfgi_scan_ratio(scan);
+    for (int i = scan.first; i < scan.end; ++i, t *= ratio) {
+        vec2 q;
+        float slope;
+        if (!hfgi_scan_slope(scan, i, t, HFGI_NV, d, hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)], q, slope))
+            break;
+        smax = max(smax, slope);
+    }
+    return smax;
+}
+
 // ω_max along d (eq. 14–17). The valid samples form a prefix of the ladder [first, end). With
 // HFGI_FLAG_HORIZON_SAMPLES it is their largest blocking angle (docs/accuracy.md §4: eq. 17's
 // spline maximum never exceeds the largest sample and lowers near horizons); otherwise the
@@ -47,6 +65,7 @@ float hfgi_base[HFGI_NV];
 // repetition through the ladder's n_v samples, and the largest of the extra samples (near and
 // far steps, gi.near_steps and gi.scan_reach) beside it.
 float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
+    if (samples_max) return atan(hfgi_horizon_slope(scan, d));
     float wmax = -1.5707963267948966;
     int count = 0;
     float limit;
