@@ -40,11 +40,17 @@ layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 float hfgi_omega[HFGI_NV];
 float hfgi_base[HFGI_NV];
 
-// tan ω_max along d with HFGI_FLAG_HORIZON_SAMPLES: the largest slope of the near-field limit and
-// the samples. atan is monotonic, so the largest angle is the atan of the largest slope: one atan
-// per ray instead of one per sample (docs/performance.md §18).
-float hfgi_horizon_slope(hfgi_Scan scan, vec2 d) {
+// ω_max along d (eq. 14–17). The valid samples form a prefix of the ladder [first, end). With
+// HFGI_FLAG_HORIZON_SAMPLES it is their largest blocking angle (docs/accuracy.md §4: eq. 17's
+// spline maximum never exceeds the largest sample and lowers near horizons); otherwise the
+// paper's maximum of the cubic B-spline through ω_i at knots and mid-points, ends extended by
+// repetition through the ladder's n_v samples, and the largest of the extra samples (near and
+// far steps, gi.near_steps and gi.scan_reach) beside it.
+float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
+    // The largest slope (of every sample with samples_max, else of the extra ones): atan is
+    // monotonic, so one atan of it instead of one per sample (docs/performance.md §18).
     float smax = -3.402823466e38; // atan: −π/2 (no sample)
+    int count = 0;
     float limit;
     if (scan.first < 0 && hfgi_scan_limit_slope(scan, d, limit)) smax = limit;
     float t = hfgi_scan_t(scan, scan.first, HFGI_NV), ratio = hfgi_scan_ratio(scan);
@@ -53,36 +59,14 @@ float hfgi_horizon_slope(hfgi_Scan scan, vec2 d) {
         float slope;
         if (!hfgi_scan_slope(scan, i, t, HFGI_NV, d, hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)], q, slope))
             break;
-        smax = max(smax, slope);
-    }
-    return smax;
-}
-
-// ω_max along d (eq. 14–17). The valid samples form a prefix of the ladder [first, end). With
-// HFGI_FLAG_HORIZON_SAMPLES it is their largest blocking angle (docs/accuracy.md §4: eq. 17's
-// spline maximum never exceeds the largest sample and lowers near horizons); otherwise the
-// paper's maximum of the cubic B-spline through ω_i at knots and mid-points, ends extended by
-// repetition through the ladder's n_v samples, and the largest of the extra samples (near and
-// far steps, gi.near_steps and gi.scan_reach) beside it.
-float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
-    if (samples_max) return atan(hfgi_horizon_slope(scan, d));
-    float wmax = -1.5707963267948966;
-    int count = 0;
-    float limit;
-    if (scan.first < 0 && hfgi_scan_limit(scan, d, limit)) wmax = limit;
-    float t = hfgi_scan_t(scan, scan.first, HFGI_NV), ratio = hfgi_scan_ratio(scan);
-    for (int i = scan.first; i < scan.end; ++i, t *= ratio) {
-        vec2 q;
-        float omega;
-        if (!hfgi_scan_sample(scan, i, t, HFGI_NV, d, hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)], q, omega))
-            break;
         if (samples_max || i < 0 || i >= HFGI_NV) {
-            wmax = max(wmax, omega);
+            smax = max(smax, slope);
         } else {
-            hfgi_omega[i] = omega;
+            hfgi_omega[i] = atan(slope);
             count = i + 1;
         }
     }
+    float wmax = atan(smax);
     if (samples_max) return wmax;
     for (int i = 0; i < count; ++i) {
         float a = hfgi_omega[max(i - 1, 0)];

@@ -325,18 +325,8 @@ mod tests {
         let viewed = |n: &str| TEXEL_VIEWED.iter().any(|t| n.ends_with(t));
         let largest = e.buffers.iter().filter(|(n, _)| viewed(n)).map(|(_, b)| *b / 4).max().expect("viewed");
         let mut info = crate::vk::DeviceInfo {
-            name: "test device".into(),
-            kind: ash::vk::PhysicalDeviceType::CPU,
-            driver: String::new(),
-            api_version: (1, 3, 0),
-            max_image_dimension_2d: 16384,
-            timestamp_period: 1.0,
-            timestamp_valid_bits: 64,
-            device_local_heap_bytes: 1 << 40,
-            max_storage_buffer_range: u32::MAX,
-            max_memory_allocation_size: 1 << 40,
             max_texel_buffer_elements: (largest - 1) as u32,
-            subgroup_vote_compute: true,
+            ..crate::vk::DeviceInfo::roomy_test_device()
         };
         let err = check_fits(&e, &info).expect_err("texel limit").to_string();
         assert!(err.contains("maxTexelBufferElements") && err.contains("hfgi."), "{err}");

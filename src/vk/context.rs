@@ -90,6 +90,28 @@ pub struct DeviceInfo {
     pub subgroup_vote_compute: bool,
 }
 
+#[cfg(test)]
+impl DeviceInfo {
+    /// A device for the checks' unit tests: named `test device`, every limit far above what any
+    /// test scene needs, subgroup vote in compute; tests lower the one limit they check.
+    pub(crate) fn roomy_test_device() -> Self {
+        Self {
+            name: "test device".into(),
+            kind: vk::PhysicalDeviceType::CPU,
+            driver: String::new(),
+            api_version: (1, 3, 0),
+            max_image_dimension_2d: 16384,
+            timestamp_period: 1.0,
+            timestamp_valid_bits: 64,
+            device_local_heap_bytes: 1 << 40,
+            max_storage_buffer_range: u32::MAX,
+            max_memory_allocation_size: 1 << 40,
+            max_texel_buffer_elements: u32::MAX,
+            subgroup_vote_compute: true,
+        }
+    }
+}
+
 struct Messenger {
     loader: ash::ext::debug_utils::Instance,
     raw: vk::DebugUtilsMessengerEXT,

@@ -192,20 +192,8 @@ mod tests {
     fn a_device_without_subgroup_vote_is_refused_for_indirect_light() {
         let mut scene = crate::scene::file::default_scene().expect("default scene");
         scene.gi.bounces = 1;
-        let mut info = crate::vk::DeviceInfo {
-            name: "test device".into(),
-            kind: ash::vk::PhysicalDeviceType::CPU,
-            driver: String::new(),
-            api_version: (1, 3, 0),
-            max_image_dimension_2d: 16384,
-            timestamp_period: 1.0,
-            timestamp_valid_bits: 64,
-            device_local_heap_bytes: 1 << 40,
-            max_storage_buffer_range: u32::MAX,
-            max_memory_allocation_size: 1 << 40,
-            max_texel_buffer_elements: u32::MAX,
-            subgroup_vote_compute: false,
-        };
+        let mut info =
+            crate::vk::DeviceInfo { subgroup_vote_compute: false, ..crate::vk::DeviceInfo::roomy_test_device() };
         let err = crate::frame::memory::check_device(&scene, &info).expect_err("no vote").to_string();
         assert!(err.contains("test device") && err.contains("subgroupAny") && err.contains("gi.bounces = 0"), "{err}");
         scene.gi.bounces = 0;
