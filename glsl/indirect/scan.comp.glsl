@@ -224,12 +224,12 @@ bool hfgi_nothing_beyond(bool bounded, float gmax, float bmin, float running_slo
     return bounded && gmax - bmin <= running_slope * (t * texel);
 }
 
-// Members a lane has found and not yet cast, in order (docs/performance.md §18): Δh, the step t
-// and the ladder sample index of each. A lane walks on past its members while the subgroup's
+// Members a lane has found and not yet cast, in order (docs/performance.md §18): the slope, the
+// step t and the ladder sample index of each. A lane walks on past its members while the subgroup's
 // other lanes look for theirs; the subgroup casts when one lane's queue is full, one member per
 // lane, so lanes neither wait for one another's members nor cast alone.
 struct hfgi_Queue {
-    float dh[HFGI_QUEUE];
+    float slope[HFGI_QUEUE];
     float t[HFGI_QUEUE];
     int i[HFGI_QUEUE];
     int count;
@@ -238,7 +238,7 @@ struct hfgi_Queue {
 hfgi_Queue queue_empty() {
     hfgi_Queue m;
     [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
-        m.dh[k] = 0.0;
+        m.slope[k] = 0.0;
         m.t[k] = 1.0;
         m.i[k] = 0;
     }
@@ -253,7 +253,7 @@ void queue_sample(inout hfgi_Queue m, inout float walk_slope, float dh, float t,
         walk_slope = dh / (t * texel);
         [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
             if (k == m.count) {
-                m.dh[k] = dh;
+                m.slope[k] = walk_slope;
                 m.t[k] = t;
                 m.i[k] = i;
             }
@@ -266,10 +266,9 @@ void queue_sample(inout hfgi_Queue m, inout float walk_slope, float dh, float t,
 void queue_cast(inout hfgi_Queue m, inout vec3 u[HFGI_NE], inout float running, inout float running_slope,
                 hfgi_Scan scan, vec2 d, bool wrap) {
     if (m.count == 0) return;
-    float slope = m.dh[0] / (m.t[0] * scan.texel_size);
-    cast_member(u, running, running_slope, slope, m.i[0], scan.p + m.t[0] * d, d, scan, wrap);
+    cast_member(u, running, running_slope, m.slope[0], m.i[0], scan.p + m.t[0] * d, d, scan, wrap);
     [[unroll]] for (int k = 0; k + 1 < HFGI_QUEUE; ++k) {
-        m.dh[k] = m.dh[k + 1];
+        m.slope[k] = m.slope[k + 1];
         m.t[k] = m.t[k + 1];
         m.i[k] = m.i[k + 1];
     }

@@ -44,8 +44,8 @@ pub struct IndirectPass {
     pub radiance: RadiancePyramid,
     /// The max pyramid whose top the scan's early stop reads ([`uses_max_bound`]).
     pub max: Option<MaxPyramid>,
-    /// The scan's pipelines with their sets, by what each compiles in ([`ScanKind`]: the
-    /// max-pyramid bound, the radial probes): one per kind the scene's bounces need.
+    /// The scan's pipelines with their sets, by what each compiles in ([`ScanKind`]: the radial
+    /// probes): one per kind the scene's bounces need.
     scans: Vec<(ScanKind, ComputePipeline, vk::DescriptorSet)>,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,

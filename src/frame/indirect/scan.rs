@@ -180,11 +180,6 @@ impl<T> PushGet<T> for Vec<T> {
 mod tests {
     use super::*;
 
-    /// The pipelines a scene gets (docs/performance.md §12, §17, §18): `default` with 2 bounces
-    /// a probing first one and a bare second; one bounce, only the first; probes in the later
-    /// bounces only, both even with one bounce (a bounce past `gi.bounces` needs the probes'
-    /// code, which the first lacks). Every kind serves itself, and only the probing kind serves
-    /// the other.
     /// A device without subgroup vote in compute is refused by name, before any GPU work
     /// (`render` and `plan` through `memory::check_device`, an embedding through
     /// `IndirectPass::new`); a scene without indirect light does not need it.
@@ -203,6 +198,11 @@ mod tests {
         crate::frame::memory::check_device(&scene, &info).expect("vote in compute");
     }
 
+    /// The pipelines a scene gets (docs/performance.md §12, §17, §18): `default` with 2 bounces
+    /// a probing first one and a bare second; one bounce, only the first; probes in the later
+    /// bounces only, both even with one bounce (a bounce past `gi.bounces` needs the probes'
+    /// code, which the first lacks). Every kind serves itself, and only the probing kind serves
+    /// the other.
     #[test]
     fn scan_kinds_cover_every_bounce_with_code_it_runs() {
         let mut s = crate::scene::file::default_scene().expect("default scene");
