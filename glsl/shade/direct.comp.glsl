@@ -1,4 +1,5 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // Direct shading (NS09 §7; docs/direct.md §6) at full resolution: incident radiance
 // T = Σ_sets L_set ⊛ V_set (SH triple product, truncated to order n), diffuse
 // ρ/π · ⟨T, rotated clamped-cosine ZH about N⟩ and glossy k_s · ⟨T, rotated Phong ZH about R⟩.
@@ -32,6 +33,7 @@ layout(constant_id = 6) const uint HFGI_NEXT_STRIDE = 0u; // indirect mode: floa
 // Below n² only for a diffuse surface, whose clamped-cosine lobe zeroes them exactly.
 layout(constant_id = 7) const int HFGI_NU = 16;
 const int HFGI_N2 = HFGI_N * HFGI_N;
+const int HFGI_UNROLLED = HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER; // the product matrix's unrolled sum
 
 // Bindings 0–3 are texel views (docs/performance.md §17: lavapipe gathers texel fetches on its
 // SIMD lanes and reads storage buffers lane by lane; the triple loop reads two per entry).
@@ -196,7 +198,6 @@ void main() {
             hfgi_V[k] = w00 * vis_at(base + r00 * vs + uint(k)) + w10 * vis_at(base + r10 * vs + uint(k))
                       + w01 * vis_at(base + r01 * vs + uint(k)) + w11 * vis_at(base + r11 * vs + uint(k));
         }
-        uint lbase = s * uint(HFGI_N2);
         bool combined = HFGI_BLOCKERS >= 2u && s == 0u; // log modes: the environment's own vector
         if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11));
         // A key light with gi.blocker_key_lights = "overlap": scaled by the fraction of its cap
@@ -204,11 +205,16 @@ void main() {
         vec4 cap = hfgi_light(pc.set_count * uint(HFGI_N2) + s);
         bool key = HFGI_BLOCKERS != 0u && pc.key_overlap != 0u && cap.w > 0.0;
         float open = key ? hfgi_key_open(P, cap.xyz, cap.w) : 1.0;
-        // T_k += Σ_ij Γ_ijk L_i V_j (every ordered (i, j, k) is stored).
-        for (uint e = 0u; e < hfgi_triple_count; ++e) {
-            uvec2 t = hfgi_triple(e);
-            uint i = t.x & 0xFFu, j = (t.x >> 8) & 0xFFu, k = (t.x >> 16) & 0xFFu;
-            vec3 add = uintBitsToFloat(t.y) * hfgi_V[j] * hfgi_light(lbase + i).rgb;
+        // T_k += Σ_ij Γ_ijk L_i V_j = Σ_j V_j M_s[j][k]: the set's product matrix, formed on the
+        // host from its lighting (shade::product_matrix; n² × n² RGB after the caps).
+        uint mbase = pc.set_count * uint(HFGI_N2 + 1) + s * uint(HFGI_N2 * HFGI_N2);
+        // The sum over j unrolled: V indexed by constants stays in registers (docs/performance.md
+        // §19). The bound is a literal (order ≤ HFGI_MAX_SH_ORDER): the copies past n² are dead.
+        [[dont_unroll]] for (int k = 0; k < HFGI_N2; ++k) {
+            vec3 add = vec3(0.0);
+            [[unroll]] for (int j = 0; j < HFGI_UNROLLED; ++j) {
+                if (j < HFGI_N2) add += hfgi_V[j] * hfgi_light(mbase + uint(j * HFGI_N2 + k)).rgb;
+            }
             if (combined) hfgi_T2[k] += add; else if (key) K[k] += open * add; else hfgi_T[k] += add;
         }
     }

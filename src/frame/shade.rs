@@ -107,13 +107,12 @@ pub(crate) struct ShadeData {
 /// The `hfgi.shade.light` data of `sets` (in buffer order): each set's `n²` RGB lighting
 /// ([`set_lighting`]) as `vec4`s, then per set its cap — a key light's unit direction and
 /// angular radius (`w > 0`), zeros for the environment — for the spheres' key-light shadows
-/// (`gi.blocker_key_lights = "overlap"`).
+/// (`gi.blocker_key_lights = "overlap"`), then per set its product matrix
+/// ([`product_matrix`], `n⁴` `vec4`s).
 pub(crate) fn light_data(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Vec<[f32; 4]> {
-    let mut out: Vec<[f32; 4]> = sets
-        .iter()
-        .flat_map(|(k, set)| set_lighting(scene, *k, set))
-        .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0])
-        .collect();
+    let lighting: Vec<Vec<[f64; 3]>> = sets.iter().map(|(k, set)| set_lighting(scene, *k, set)).collect();
+    let rgba = |c: &[f64; 3]| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0];
+    let mut out: Vec<[f32; 4]> = lighting.iter().flatten().map(rgba).collect();
     out.extend(sets.iter().map(|(k, _)| match k {
         SetKind::KeyLight(i) => {
             let l = &scene.key_lights[*i];
@@ -122,7 +121,26 @@ pub(crate) fn light_data(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Vec<[
         }
         SetKind::Environment => [0.0; 4],
     }));
+    let t = triple::triple(scene.gi.sh_order);
+    out.extend(lighting.iter().flat_map(|l| product_matrix(&t, l)).map(|c| rgba(&c)));
     out
+}
+
+/// The SH product with lighting `l` as a matrix (docs/direct.md §6): `M[j][k] = Σ_i Γ_ijk l_i`
+/// (RGB, row-major, `n² × n²`), so that the incident radiance of visibility `V` is
+/// `T_k = Σ_j V_j M[j][k]`, the triple product `L ⊛ V` with the lighting fixed: the shader
+/// forms one matrix–vector product per texel and set instead of walking the tensor
+/// (docs/performance.md §19). Accumulated in f64.
+pub(crate) fn product_matrix(t: &triple::Triple, l: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let n2 = t.n * t.n;
+    let mut m = vec![[0.0; 3]; n2 * n2];
+    for &(i, j, k, g) in &t.entries {
+        let (i, j, k) = (i as usize, j as usize, k as usize);
+        for c in 0..3 {
+            m[j * n2 + k][c] += g * l[i][c];
+        }
+    }
+    m
 }
 
 impl ShadePush {
@@ -191,7 +209,7 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
     };
     let triples = triple::triple(n).entries.len();
     [
-        ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * (n * n + 1) * 16)),
+        ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * (n * n + 1 + n * n * n * n) * 16)),
         ("hfgi.shade.triple", upload_bytes(triples * 8)),
         ("hfgi.shade.albedo", upload_bytes(albedo * 16)),
         ("hfgi.shade.consts", upload_bytes(constants(n, scene.material.exponent as f64, triples as u32).len() * 4)),
@@ -447,5 +465,37 @@ impl ShadePass {
         self.buffers.drain(..).for_each(|b| b.destroy(ctx));
         self.output.destroy(ctx);
         self.incident.destroy(ctx);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::sh;
+
+    /// `T_k = Σ_j V_j M[j][k]` is the order-n projection of the product of the two band-limited
+    /// functions L(ω)·V(ω), computed here by sphere quadrature (exact for these degrees), not
+    /// from the triple tensor: orders 1, 2, 4 and 6, one colour channel per random lighting.
+    #[test]
+    fn the_product_matrix_applied_to_v_is_the_projection_of_l_times_v() {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in [1usize, 2, 4, 6] {
+            let n2 = n * n;
+            let l: Vec<[f64; 3]> = (0..n2).map(|_| [next(), next(), next()]).collect();
+            let v: Vec<f64> = (0..n2).map(|_| next()).collect();
+            let m = product_matrix(&triple::triple(n), &l);
+            for c in 0..3 {
+                let lc: Vec<f64> = l.iter().map(|x| x[c]).collect();
+                let exact = sh::project(n, |d| sh::reconstruct(n, &lc, d) * sh::reconstruct(n, &v, d), 2 * n + 2);
+                for k in 0..n2 {
+                    let t: f64 = (0..n2).map(|j| v[j] * m[j * n2 + k][c]).sum();
+                    assert!((t - exact[k]).abs() < 1e-10, "order {n}, channel {c}, k {k}: {t} vs {}", exact[k]);
+                }
+            }
+        }
     }
 }
