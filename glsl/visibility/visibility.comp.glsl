@@ -12,6 +12,7 @@ layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // pyramid levels n_v
 layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
+const int HFGI_NQ = (HFGI_NE + 3) / 4;           // vec4s per row of the fold (shared::rows_of_vec4)
 // Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap and flags
 // without the dynamic bits): branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 3) const uint HFGI_STACK = 1u;
@@ -27,7 +28,7 @@ layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels;
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(binding = 2) uniform usamplerBuffer hfgi_stack_texels;
 layout(binding = 3) uniform usamplerBuffer hfgi_samples_texels; // cos φ, sin φ, lo, hi (f32 bits)
-layout(binding = 4) uniform usamplerBuffer hfgi_fold_texels;    // A_j: n² × NE, row-major
+layout(binding = 4) uniform usamplerBuffer hfgi_fold_texels;    // A_j: n² rows of NQ uvec4s (NE floats, zero-padded)
 layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };    // accumulated over azimuth chunks (hfgi_store.glsl)
 layout(binding = 6) uniform usamplerBuffer hfgi_horizons_texels; // sweep: [sample][receiver][2]
 layout(binding = 7) uniform usamplerBuffer hfgi_hplanes_texels;  // the height stack's planes (hfgi_pyramid.glsl)
@@ -152,11 +153,17 @@ void main() {
         // eq. 11 within the sample's elevation window (§6), in the NLP or legendre basis.
         float v[HFGI_NE];
         hfgi_elevation(max(wmax, smp.z), smp.w, v);
-        // eq. 20–21 folded: V += A_j v_j.
-        uint base = (pc.sample_offset + j) * uint(HFGI_N2 * HFGI_NE);
+        // eq. 20–21 folded: V += A_j v_j. Each row of A_j is padded to HFGI_NQ vec4s
+        // (shared::rows_of_vec4): a third of the fetches (docs/performance.md §19), the same sum.
+        uint base = (pc.sample_offset + j) * uint(HFGI_N2 * HFGI_NQ);
         for (int k = 0; k < HFGI_N2; ++k) {
             float acc = 0.0;
-            for (int l = 0; l < HFGI_NE; ++l) acc += HFGI_TEXEL_F(hfgi_fold_texels, base + uint(k * HFGI_NE + l)) * v[l];
+            for (int q = 0; q < HFGI_NQ; ++q) {
+                vec4 a = uintBitsToFloat(texelFetch(hfgi_fold_texels, int(base + uint(k * HFGI_NQ + q))));
+                for (int c = 0; c < 4; ++c) {
+                    if (4 * q + c < HFGI_NE) acc += a[c] * v[4 * q + c];
+                }
+            }
             V[k] += acc;
         }
     }

@@ -89,6 +89,14 @@ pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::sc
         .collect()
 }
 
+/// `fold` (rows of `e` floats, [`gpu_fold`]) with every row padded with zeros to a multiple of 4
+/// floats, so that the visibility shader reads each row as `vec4`s through an `R32G32B32A32` view
+/// (a third of the texel fetches per azimuth; docs/performance.md §19).
+pub fn rows_of_vec4(fold: &[f32], e: usize) -> Vec<f32> {
+    let e4 = e.div_ceil(4) * 4;
+    fold.chunks(e.max(1)).flat_map(|row| row.iter().copied().chain(std::iter::repeat(0.0)).take(e4)).collect()
+}
+
 /// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / cost`
 /// samples each (at least one; `cost` loop iterations per azimuth), one dispatch each, the later
 /// ones accumulating.

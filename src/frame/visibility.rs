@@ -52,7 +52,8 @@ impl VisibilityData {
             for &phi in &set.phi {
                 data.samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
             }
-            data.fold.extend(super::shared::gpu_fold(n, set, &scene.gi));
+            let e = elevation::gpu_size(scene.gi.elevation_basis, n);
+            data.fold.extend(super::shared::rows_of_vec4(&super::shared::gpu_fold(n, set, &scene.gi), e));
             data.sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
         }
         data
@@ -158,7 +159,7 @@ impl VisibilityPass {
         let made = (|| -> Result<vk::DescriptorSet> {
             // Texel views (docs/performance.md §17): the samples as uvec4s, the fold as words,
             // V as words (written here as a storage buffer, read by shade.direct through the view).
-            let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
+            let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT];
             for ((name, size), view) in sizes.into_iter().zip(views) {
                 parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
             }
