@@ -99,10 +99,10 @@ void radiance_begin() {
     hfgi_rstride = HFGI_RSTACK != 0u ? hfgi_rplanes(pc.radiance_planes).z : 0u;
 }
 
-// The field's largest level-0 height (relative to level 0's bias): the max pyramid's 1 × 1 top
-// (hfgi_max.glsl), once per receiver, for the early stop.
+// The field's largest level-0 height (relative to level 0's bias): the max reduction's 1 × 1
+// top (hfgi_max.glsl), once per receiver, for the early stop.
 float max_begin(uvec2 n0) {
-    return hfgi_max(hfgi_max_offset(n0, hfgi_max_count(n0) - 1u, false));
+    return hfgi_max(hfgi_max_offset(n0, hfgi_max_count(n0) - 1u));
 }
 
 // CONVENTIONS.md height gradient at texel (i, j) of level 0 (one-sided at the border, periodic

@@ -1,9 +1,10 @@
-//! Stage `pyramid.max` (docs/accuracy.md §4): the max pyramid of the level-0 heights, whose
+//! Stage `pyramid.max` (docs/accuracy.md §4): the max reduction of the level-0 heights, whose
 //! 1 × 1 top (the field's largest height) lets the indirect scan stop each ray where nothing
-//! farther can rise above its horizon. (Until docs/performance.md §18 the scan also read its
-//! finer levels to skip the probes of gaps that could hold no member; on lavapipe that read cost
-//! more than it saved, so the scan reads only the top now.) Layout and CPU twin:
-//! [`crate::reference::max`]; shader `glsl/pyramid/max.comp.glsl`.
+//! farther can rise above its horizon. Each level takes the largest of 8 × 8 cells of the one
+//! before (1/63 of the field in all). (Until docs/performance.md §18 the scan also read a max
+//! pyramid's finer levels to skip the probes of gaps that could hold no member; on lavapipe that
+//! read cost more than it saved, and since §19 only what the top needs is built.) Layout and CPU
+//! twin: [`crate::reference::max`]; shader `glsl/pyramid/max.comp.glsl`.
 //!
 //! Recorded after `pyramid.decimate` (it reads level 0 of the height pyramid's levels buffer)
 //! whenever the heights changed, only for scenes whose indirect scan uses it
@@ -25,7 +26,7 @@ use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
 
 pub const STAGE_MAX: &str = super::stages::stage_name("pyramid.max");
 
-/// Whether the indirect scan of `scene` reads the max pyramid: it has radial probes (the stage
+/// Whether the indirect scan of `scene` reads the max reduction: it has radial probes (the stage
 /// was built for the probes' bound, docs/accuracy.md §4; since docs/performance.md §18 it serves
 /// the early stop of every bounce of such a scene, which would serve a scene without probes as
 /// well: not extended to them yet), level 0 is the bilinear surface (the bound is over it) and
@@ -34,7 +35,7 @@ pub fn uses_max_bound(scene: &Scene) -> bool {
     why_no_max_bound(scene).is_none()
 }
 
-/// Why the indirect scan of `scene` does not read the max pyramid, if it does not.
+/// Why the indirect scan of `scene` does not read the max reduction, if it does not.
 pub fn why_no_max_bound(scene: &Scene) -> Option<&'static str> {
     let gi = &scene.gi;
     if gi.radial_probes == 0 && gi.radial_probes_later == 0 {
@@ -42,7 +43,7 @@ pub fn why_no_max_bound(scene: &Scene) -> Option<&'static str> {
     } else if gi.level0 != Level0::Bilinear {
         Some("gi.level0 = \"bspline\": the bound holds for the bilinear surface")
     } else if scene.wrap {
-        Some("a periodic field: the max pyramid does not wrap")
+        Some("a periodic field: the early stop was built and tested for clamped fields only")
     } else {
         None
     }
