@@ -13,6 +13,7 @@ layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
 layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
 layout(constant_id = 3) const int HFGI_NE = 4;     // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
+const int HFGI_NQ = (HFGI_NE + 3) / 4;              // vec4s per row of the fold (shared::rows_of_vec4)
 // Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap, flags without
 // the dynamic bits, and radiance_stack): branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 4) const uint HFGI_STACK = 1u;
@@ -38,7 +39,7 @@ layout(binding = 3) uniform usamplerBuffer hfgi_radiance_levels_texels; // radia
 layout(std430, binding = 4) readonly buffer RTable { hfgi_Level hfgi_radiance_table[]; };
 layout(binding = 5) uniform usamplerBuffer hfgi_radiance_stack_texels; // words of gi.storage (hfgi_store.glsl)
 layout(binding = 6) uniform usamplerBuffer hfgi_samples_texels; // cos φ, sin φ, 0, 0 (f32 bits)
-layout(binding = 7) uniform usamplerBuffer hfgi_fold_texels; // A_j: n² × NE (f32 bits)
+layout(binding = 7) uniform usamplerBuffer hfgi_fold_texels; // A_j: n² rows of NQ uvec4s (NE floats, zero-padded)
 layout(binding = 8) uniform usamplerBuffer hfgi_radiance_level_texels; // per scan sample, from `first`
 layout(std430, binding = 9) buffer U { uint hfgi_u[]; };                      // receivers × n² × rgb, over azimuth chunks (hfgi_store.glsl)
 layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
@@ -406,11 +407,17 @@ void main() {
         } else {
             scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
         }
-        // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows).
-        uint base = j * uint(HFGI_N2 * HFGI_NE);
+        // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows, each padded to
+        // HFGI_NQ vec4s, shared::rows_of_vec4: the same sum, a third of the fetches).
+        uint base = j * uint(HFGI_N2 * HFGI_NQ);
         for (int k = 0; k < HFGI_NU; ++k) {
             vec3 acc = vec3(0.0);
-            for (int l = 0; l < HFGI_NE; ++l) acc += HFGI_TEXEL_F(hfgi_fold_texels, base + uint(k * HFGI_NE + l)) * u[l];
+            for (int q = 0; q < HFGI_NQ; ++q) {
+                vec4 a = uintBitsToFloat(texelFetch(hfgi_fold_texels, int(base + uint(k * HFGI_NQ + q))));
+                for (int c = 0; c < 4; ++c) {
+                    if (4 * q + c < HFGI_NE) acc += a[c] * u[4 * q + c];
+                }
+            }
             hfgi_U[k] += acc;
         }
     }

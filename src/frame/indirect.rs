@@ -85,7 +85,9 @@ impl ScanData {
         for m in if own_later { vec![first, later] } else { vec![first] } {
             let set = azimuth::environment_set(m as usize, gi.interpolation);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
-            fold.extend(super::shared::gpu_fold(gi.sh_order, &set, gi)); // n² × NE per sample
+            // n² rows of NE per sample, each padded to whole vec4s (shared::rows_of_vec4)
+            let e = crate::math::elevation::gpu_size(gi.elevation_basis, gi.sh_order);
+            fold.extend(super::shared::rows_of_vec4(&super::shared::gpu_fold(gi.sh_order, &set, gi), e));
         }
         let sets = [(0, first), if own_later { (first, later) } else { (0, first) }];
         Self { samples, fold, ladder: scan_steps(gi, n_v), sets }
@@ -209,7 +211,7 @@ const U: usize = 3;
 /// `uvec4`s, the fold matrices, the radiance levels and `U` (which the scan writes as a storage
 /// buffer and the indirect shade reads through the view) 32-bit words.
 const BUFFER_VIEWS: [vk::Format; 4] =
-    [vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
+    [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
 
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
