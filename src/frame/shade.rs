@@ -121,16 +121,14 @@ pub(crate) fn light_data(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Vec<[
         }
         SetKind::Environment => [0.0; 4],
     }));
-    let t = triple::triple(scene.gi.sh_order);
-    out.extend(lighting.iter().flat_map(|l| product_matrix(&t, l)).map(|c| rgba(&c)));
+    let t = triple::cached(scene.gi.sh_order);
+    out.extend(lighting.iter().flat_map(|l| product_matrix(t, l)).map(|c| rgba(&c)));
     out
 }
 
 /// The SH product with lighting `l` as a matrix (docs/direct.md §6): `M[j][k] = Σ_i Γ_ijk l_i`
-/// (RGB, row-major, `n² × n²`), so that the incident radiance of visibility `V` is
-/// `T_k = Σ_j V_j M[j][k]`, the triple product `L ⊛ V` with the lighting fixed: the shader
-/// forms one matrix–vector product per texel and set instead of walking the tensor
-/// (docs/performance.md §19). Accumulated in f64.
+/// (RGB, row-major, `n² × n²`, f64), so that the incident radiance of visibility `V` is
+/// `T_k = Σ_j V_j M[j][k]`: one matrix–vector product per texel and set (docs/performance.md §19).
 pub(crate) fn product_matrix(t: &triple::Triple, l: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let n2 = t.n * t.n;
     let mut m = vec![[0.0; 3]; n2 * n2];
@@ -173,7 +171,7 @@ impl ShadeData {
     pub(crate) fn new(scene: &Scene) -> Self {
         let n = scene.gi.sh_order;
         let light = light_data(scene, &light_sets(scene));
-        let t = triple::triple(n);
+        let t = triple::cached(n);
         let entries: Vec<[u32; 2]> = t
             .entries
             .iter()
@@ -207,7 +205,7 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
         Albedo::Map(m) => m.len(),
         Albedo::Constant(_) => 1,
     };
-    let triples = triple::triple(n).entries.len();
+    let triples = triple::cached(n).entries.len();
     [
         ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * (n * n + 1 + n * n * n * n) * 16)),
         ("hfgi.shade.triple", upload_bytes(triples * 8)),

@@ -35,6 +35,21 @@ impl Triple {
 /// # Panics
 /// If `n ∉ 1..=16` (programmer error).
 pub fn triple(n: usize) -> Triple {
+    cached(n).clone()
+}
+
+/// [`triple`]'s tensor of order `n`, computed once per order and process (the shading's
+/// product matrices are rebuilt on every lighting update, docs/direct.md §6).
+///
+/// # Panics
+/// If `n ∉ 1..=16` (programmer error).
+pub fn cached(n: usize) -> &'static Triple {
+    check_order(n);
+    static TABLES: [std::sync::OnceLock<Triple>; 16] = [const { std::sync::OnceLock::new() }; 16];
+    TABLES[n - 1].get_or_init(|| compute(n))
+}
+
+fn compute(n: usize) -> Triple {
     check_order(n);
     let nn = n * n;
     // Per-coefficient (l, m).
