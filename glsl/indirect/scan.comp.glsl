@@ -13,7 +13,7 @@ layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
 layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
 layout(constant_id = 3) const int HFGI_NE = 4;     // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
-const int HFGI_NQ = (HFGI_NE + 3) / 4;              // vec4s per row of the fold (shared::rows_of_vec4)
+const int HFGI_NQ = (HFGI_NE + 3) / 4;              // vec4s per row of the fold (shared::gpu_fold)
 // Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap, flags without
 // the dynamic bits, and radiance_stack): branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 4) const uint HFGI_STACK = 1u;
@@ -408,7 +408,7 @@ void main() {
             scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
         }
         // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows, each padded to
-        // HFGI_NQ vec4s, shared::rows_of_vec4: the same sum, a third of the fetches).
+        // HFGI_NQ vec4s, shared::gpu_fold: the same sum, a third of the fetches).
         uint base = j * uint(HFGI_N2 * HFGI_NQ);
         for (int k = 0; k < HFGI_NU; ++k) {
             vec3 acc = vec3(0.0);

@@ -36,7 +36,8 @@ const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_UNROLLED = HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER; // the product matrix's unrolled sum
 
 // Bindings 0–3 are texel views (docs/performance.md §17: lavapipe gathers texel fetches on its
-// SIMD lanes and reads storage buffers lane by lane; the triple loop reads two per entry).
+// SIMD lanes and reads storage buffers lane by lane; the blockers' triple loop reads two per
+// entry, the product with the lighting's matrix one per term).
 layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels; // level 0 = heights (f32 bits)
 layout(binding = 1) uniform usamplerBuffer hfgi_vis_texels;    // sets × receivers × n²; U: receivers × n² × rgb (hfgi_store.glsl)
 layout(binding = 2) uniform usamplerBuffer hfgi_light_texels;  // sets × n² (rgb), then per set its cap (key light: dir, α)

@@ -12,7 +12,7 @@ layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // pyramid levels n_v
 layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
-const int HFGI_NQ = (HFGI_NE + 3) / 4;           // vec4s per row of the fold (shared::rows_of_vec4)
+const int HFGI_NQ = (HFGI_NE + 3) / 4;           // vec4s per row of the fold (shared::gpu_fold)
 // Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap and flags
 // without the dynamic bits): branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 3) const uint HFGI_STACK = 1u;
@@ -154,7 +154,7 @@ void main() {
         float v[HFGI_NE];
         hfgi_elevation(max(wmax, smp.z), smp.w, v);
         // eq. 20–21 folded: V += A_j v_j. Each row of A_j is padded to HFGI_NQ vec4s
-        // (shared::rows_of_vec4): a third of the fetches (docs/performance.md §19), the same sum.
+        // (shared::gpu_fold): a third of the fetches (docs/performance.md §19), the same sum.
         uint base = (pc.sample_offset + j) * uint(HFGI_N2 * HFGI_NQ);
         for (int k = 0; k < HFGI_N2; ++k) {
             float acc = 0.0;

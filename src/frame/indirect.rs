@@ -85,9 +85,7 @@ impl ScanData {
         for m in if own_later { vec![first, later] } else { vec![first] } {
             let set = azimuth::environment_set(m as usize, gi.interpolation);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
-            // n² rows of NE per sample, each padded to whole vec4s (shared::rows_of_vec4)
-            let e = crate::math::elevation::gpu_size(gi.elevation_basis, gi.sh_order);
-            fold.extend(super::shared::rows_of_vec4(&super::shared::gpu_fold(gi.sh_order, &set, gi), e));
+            fold.extend(super::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
         }
         let sets = [(0, first), if own_later { (first, later) } else { (0, first) }];
         Self { samples, fold, ladder: scan_steps(gi, n_v), sets }
@@ -207,9 +205,9 @@ fn radiance_pyramid(
 
 const U: usize = 3;
 
-/// The texel views of the scan's own buffers ([`buffer_sizes`]' order): the samples are
-/// `uvec4`s, the fold matrices, the radiance levels and `U` (which the scan writes as a storage
-/// buffer and the indirect shade reads through the view) 32-bit words.
+/// The texel views of the scan's own buffers ([`buffer_sizes`]' order): the samples and the fold
+/// matrices' padded rows are `uvec4`s, the radiance levels and `U` (which the scan writes as a
+/// storage buffer and the indirect shade reads through the view) 32-bit words.
 const BUFFER_VIEWS: [vk::Format; 4] =
     [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
 

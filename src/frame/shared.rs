@@ -78,23 +78,25 @@ pub const VISIBILITY_LOOP_BUDGET: u32 = 40_000;
 /// each member still evaluated the 36 legendre integrals (8 × 36 loop iterations a member).
 pub const INDIRECT_LOOP_BUDGET: u32 = 40_000;
 
-/// The folded wedge matrices `A_j` of `set` as the scan shaders read them: `n² × e` per azimuth,
-/// row-major, f32, acting on the GPU's per-azimuth values (`math::elevation::gpu_size`: the NLP
-/// coefficients, or the legendre basis's Fourier moments).
+/// The folded wedge matrices `A_j` of `set` as the scan shaders read them: `n²` rows per
+/// azimuth, each of the `e` values acting on the GPU's per-azimuth values
+/// (`math::elevation::gpu_size`: the NLP coefficients, or the legendre basis's Fourier moments)
+/// zero-padded to whole `vec4`s, f32: the shaders read each row through an `R32G32B32A32` view,
+/// a third of the texel fetches of one word at a time (docs/performance.md §19).
 pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::scene::model::GiSettings) -> Vec<f32> {
     use crate::math::{azimuth, elevation};
+    let e = elevation::gpu_size(gi.elevation_basis, n);
+    let e4 = e.div_ceil(4) * 4;
     azimuth::fold(n, set, gi.interpolation, gi.elevation_basis)
         .into_iter()
-        .flat_map(|a| elevation::fold_to_moments(gi.elevation_basis, n, a).data.into_iter().map(|v| v as f32))
+        .flat_map(|a| {
+            let rows = elevation::fold_to_moments(gi.elevation_basis, n, a).data;
+            debug_assert_eq!(rows.len(), n * n * e);
+            rows.chunks(e)
+                .flat_map(|row| row.iter().map(|&v| v as f32).chain(std::iter::repeat(0.0)).take(e4))
+                .collect::<Vec<_>>()
+        })
         .collect()
-}
-
-/// `fold` (rows of `e` floats, [`gpu_fold`]) with every row padded with zeros to a multiple of 4
-/// floats, so that the visibility shader reads each row as `vec4`s through an `R32G32B32A32` view
-/// (a third of the texel fetches per azimuth; docs/performance.md §19).
-pub fn rows_of_vec4(fold: &[f32], e: usize) -> Vec<f32> {
-    let e4 = e.div_ceil(4) * 4;
-    fold.chunks(e.max(1)).flat_map(|row| row.iter().copied().chain(std::iter::repeat(0.0)).take(e4)).collect()
 }
 
 /// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / cost`

@@ -52,8 +52,7 @@ impl VisibilityData {
             for &phi in &set.phi {
                 data.samples.push([phi.cos() as f32, phi.sin() as f32, set.lo as f32, set.hi as f32]);
             }
-            let e = elevation::gpu_size(scene.gi.elevation_basis, n);
-            data.fold.extend(super::shared::rows_of_vec4(&super::shared::gpu_fold(n, set, &scene.gi), e));
+            data.fold.extend(super::shared::gpu_fold(n, set, &scene.gi));
             data.sets.push(SetRange { kind: *kind, first, count: set.phi.len() as u32 });
         }
         data
@@ -157,8 +156,8 @@ impl VisibilityPass {
             ..Default::default()
         };
         let made = (|| -> Result<vk::DescriptorSet> {
-            // Texel views (docs/performance.md §17): the samples as uvec4s, the fold as words,
-            // V as words (written here as a storage buffer, read by shade.direct through the view).
+            // Texel views (docs/performance.md §17): the samples and the fold's padded rows as
+            // uvec4s (§19), V as words (written here as a storage buffer, read by shade.direct through the view).
             let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT];
             for ((name, size), view) in sizes.into_iter().zip(views) {
                 parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);

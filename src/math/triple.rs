@@ -50,7 +50,6 @@ pub fn cached(n: usize) -> &'static Triple {
 }
 
 fn compute(n: usize) -> Triple {
-    check_order(n);
     let nn = n * n;
     // Per-coefficient (l, m).
     let lm: Vec<(usize, i32)> = (0..n as i32).flat_map(|l| (-l..=l).map(move |m| (l as usize, m))).collect();
