@@ -6,6 +6,32 @@
 #define HFGI_ELEVATION_GLSL
 #include "hfgi_nlp.glsl"
 
+// sin x and cos x for |x| ≤ π/2 (elevations, their half-differences and midpoints), by their
+// Taylor series to x¹¹ and x¹² in Horner form: the first omitted terms are below 6e-8 and 7e-9
+// at π/2, under f32's spacing at 1 (1.2e-7), and sin keeps its relative precision as x → 0.
+// A few multiply-adds instead of the general sin and cos and their range reduction
+// (docs/performance.md §20).
+float hfgi_sin_elevation(float x) {
+    float x2 = x * x;
+    float p = -2.5052108385441720e-8;              // −1/11!
+    p = p * x2 + 2.7557319223985893e-6;           // 1/9!
+    p = p * x2 - 1.9841269841269841e-4;           // −1/7!
+    p = p * x2 + 8.3333333333333333e-3;           // 1/5!
+    p = p * x2 - 1.6666666666666667e-1;           // −1/3!
+    return x + x * (x2 * p);
+}
+
+float hfgi_cos_elevation(float x) {
+    float x2 = x * x;
+    float p = 2.0876756987868099e-9;               // 1/12!
+    p = p * x2 - 2.7557319223985891e-7;           // −1/10!
+    p = p * x2 + 2.4801587301587302e-5;           // 1/8!
+    p = p * x2 - 1.3888888888888889e-3;           // −1/6!
+    p = p * x2 + 4.1666666666666667e-2;           // 1/4!
+    p = p * x2 - 0.5;                             // −1/2!
+    return 1.0 + x2 * p;
+}
+
 // The 2n + 1 Fourier moments of the indicator of [a, b] (math::elevation::fourier_moments):
 // [Δ, (2/k) sin(kΔ/2) cos kμ, (2/k) sin(kΔ/2) sin kμ], k = 1..n, Δ = b − a, μ = (a + b)/2. Every
 // term is proportional to sin(kΔ/2), so a thin interval keeps its precision relative to its own
@@ -17,7 +43,8 @@ void hfgi_fourier_moments(float a, float b, out float e[HFGI_NE]) {
     float d = b - a;
     float h = 0.5 * d;
     float mu = 0.5 * (a + b);
-    float sh1 = sin(h), ch1 = cos(h), sm1 = sin(mu), cm1 = cos(mu);
+    float sh1 = hfgi_sin_elevation(h), ch1 = hfgi_cos_elevation(h);
+    float sm1 = hfgi_sin_elevation(mu), cm1 = hfgi_cos_elevation(mu);
     float shk = sh1, chk = ch1, smk = sm1, cmk = cm1; // k = 1
     e[0] = d;
     for (int k = 1; k <= HFGI_N; ++k) {
