@@ -337,7 +337,7 @@ fn key_light_energy_product_vs_window() {
     let l: Vec<f64> = cap.sh.iter().map(|v| v[0]).collect();
     let t = hfgi::math::triple::triple(n);
     let key = c.kinds.iter().position(|k| *k == hfgi::frame::visibility::SetKind::KeyLight(0)).unwrap();
-    let prod = hfgi::math::triple::product(&t, &l, &c.visibility[key][0]);
+    let prod = hfgi::math::triple::product(t, &l, &c.visibility[key][0]);
     let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
     let product = prod.iter().zip(&cc).map(|(a, b)| a * b).sum::<f64>() / truth;
     eprintln!(

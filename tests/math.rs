@@ -583,8 +583,8 @@ fn triple_product_identity() {
         let mut one = vec![0.0; n * n];
         one[0] = (4.0 * PI).sqrt();
         let b = rng.vec(n * n);
-        assert!(max_abs_diff(&triple::product(&t, &one, &b), &b) < 1e-12, "n={n}");
-        assert!(max_abs_diff(&triple::product(&t, &b, &one), &b) < 1e-12, "n={n}");
+        assert!(max_abs_diff(&triple::product(t, &one, &b), &b) < 1e-12, "n={n}");
+        assert!(max_abs_diff(&triple::product(t, &b, &one), &b) < 1e-12, "n={n}");
     }
 }
 
@@ -614,9 +614,9 @@ fn triple_product_matches_quadrature() {
         let t = triple::triple(n);
         let a = rng.vec(n * n);
         let b = rng.vec(n * n);
-        let got = triple::product(&t, &a, &b);
+        let got = triple::product(t, &a, &b);
         let want = sh::project(n, |d| sh::reconstruct(n, &a, d) * sh::reconstruct(n, &b, d), 2 * n);
         assert!(max_abs_diff(&got, &want) < 1e-10, "n={n} err={}", max_abs_diff(&got, &want));
-        assert!(max_abs_diff(&got, &triple::product(&t, &b, &a)) < 1e-13);
+        assert!(max_abs_diff(&got, &triple::product(t, &b, &a)) < 1e-13);
     }
 }

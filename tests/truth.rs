@@ -64,7 +64,7 @@ fn flat_field_exact_reference_equals_the_analytic_value() {
     let cc = hfgi::math::zh::rotate(n, &hfgi::math::zh::clamped_cosine(n), [0.0, 0.0, 1.0]);
     let expect_sh: [f64; 3] = [0, 1, 2].map(|c| {
         let lc: Vec<f64> = l.iter().map(|v| v[c]).collect();
-        let t = hfgi::math::triple::product(&tri, &lc, &hemi);
+        let t = hfgi::math::triple::product(tri, &lc, &hemi);
         RHO[c] / PI * t.iter().zip(&cc).map(|(a, b)| a * b).sum::<f64>()
     });
     for sh_visibility in [false, true] {

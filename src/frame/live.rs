@@ -130,7 +130,7 @@ pub(crate) struct Live {
 
 impl Live {
     pub(crate) fn new(scene: Scene) -> Self {
-        let triple_count = triple::cached(scene.gi.sh_order).entries.len() as u32;
+        let triple_count = triple::triple(scene.gi.sh_order).entries.len() as u32;
         let indirect = needs_indirect(&scene);
         Self { scene, updates: Vec::new(), pending: Pending::default(), triple_count, indirect }
     }

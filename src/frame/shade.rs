@@ -121,7 +121,7 @@ pub(crate) fn light_data(scene: &Scene, sets: &[(SetKind, AzimuthSet)]) -> Vec<[
         }
         SetKind::Environment => [0.0; 4],
     }));
-    let t = triple::cached(scene.gi.sh_order);
+    let t = triple::triple(scene.gi.sh_order);
     out.extend(lighting.iter().flat_map(|l| product_matrix(t, l)).map(|c| rgba(&c)));
     out
 }
@@ -171,7 +171,7 @@ impl ShadeData {
     pub(crate) fn new(scene: &Scene) -> Self {
         let n = scene.gi.sh_order;
         let light = light_data(scene, &light_sets(scene));
-        let t = triple::cached(n);
+        let t = triple::triple(n);
         let entries: Vec<[u32; 2]> = t
             .entries
             .iter()
@@ -205,7 +205,7 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
         Albedo::Map(m) => m.len(),
         Albedo::Constant(_) => 1,
     };
-    let triples = triple::cached(n).entries.len();
+    let triples = triple::triple(n).entries.len();
     [
         ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * (n * n + 1 + n * n * n * n) * 16)),
         ("hfgi.shade.triple", upload_bytes(triples * 8)),
@@ -485,7 +485,7 @@ mod tests {
             let n2 = n * n;
             let l: Vec<[f64; 3]> = (0..n2).map(|_| [next(), next(), next()]).collect();
             let v: Vec<f64> = (0..n2).map(|_| next()).collect();
-            let m = product_matrix(&triple::triple(n), &l);
+            let m = product_matrix(triple::triple(n), &l);
             for c in 0..3 {
                 let lc: Vec<f64> = l.iter().map(|x| x[c]).collect();
                 let exact = sh::project(n, |d| sh::reconstruct(n, &lc, d) * sh::reconstruct(n, &v, d), 2 * n + 2);

@@ -31,19 +31,12 @@ impl Triple {
 /// The φ factor (a trigonometric polynomial of degree ≤ 3(n−1)) is integrated exactly by
 /// `3n + 2` uniform samples; it vanishes unless `|m_k| = |m_i| ± |m_j|`, in which case the z factor
 /// is a polynomial of degree ≤ 3(n−1), integrated exactly by `3n/2 + 2` Gauss–Legendre nodes.
+/// Computed once per order and process (the shading's product matrices are rebuilt on every
+/// lighting update, docs/direct.md §6) and shared by every caller.
 ///
 /// # Panics
 /// If `n ∉ 1..=16` (programmer error).
-pub fn triple(n: usize) -> Triple {
-    cached(n).clone()
-}
-
-/// [`triple`]'s tensor of order `n`, computed once per order and process (the shading's
-/// product matrices are rebuilt on every lighting update, docs/direct.md §6).
-///
-/// # Panics
-/// If `n ∉ 1..=16` (programmer error).
-pub fn cached(n: usize) -> &'static Triple {
+pub fn triple(n: usize) -> &'static Triple {
     check_order(n);
     static TABLES: [std::sync::OnceLock<Triple>; 16] = [const { std::sync::OnceLock::new() }; 16];
     TABLES[n - 1].get_or_init(|| compute(n))

@@ -125,7 +125,7 @@ pub fn blocker_visibility(
             ((q[0] + 0.5).floor().clamp(0.0, (w - 1) as f64), (q[1] + 0.5).floor().clamp(0.0, (h - 1) as f64));
         let nrm = normals[iy as usize * w + ix as usize];
         if scene.gi.blocker_shading == BlockerShading::Primal {
-            spheres.push(primal(scene, &tri, q, nrm));
+            spheres.push(primal(scene, tri, q, nrm));
             continue;
         }
         let mut f = log_visibility(scene, q, nrm);

@@ -441,14 +441,14 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
                 let scale = open.unwrap_or(1.0);
                 for ch in 0..3 {
                     let l: Vec<f64> = light.iter().map(|c| c[ch]).collect();
-                    for (k, val) in triple::product(&t, &l, &v).into_iter().enumerate() {
+                    for (k, val) in triple::product(t, &l, &v).into_iter().enumerate() {
                         into[k][ch] += scale * val;
                     }
                 }
             }
             if let Some(b) = &blockers {
                 let vs = interpolate(&b.spheres, work, xw, yw, scene.wrap);
-                tr = super::blockers::times(&t, &tr, &vs);
+                tr = super::blockers::times(t, &tr, &vs);
                 for (a, (e, k)) in tr.iter_mut().zip(tr_env.iter().zip(&tr_key)) {
                     *a = [a[0] + e[0] + k[0], a[1] + e[1] + k[1], a[2] + e[2] + k[2]];
                 }

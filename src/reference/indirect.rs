@@ -270,7 +270,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
                 let mut tr: Vec<[f64; 3]> = (0..n * n).map(|k| [uc[0][k], uc[1][k], uc[2][k]]).collect();
                 if let Some(b) = &direct.blockers {
                     // The sphere blockers shade the bounce light too (docs/blockers.md §4).
-                    tr = super::blockers::times(&tri, &tr, &interpolate(b, work, xw, yw, scene.wrap));
+                    tr = super::blockers::times(tri, &tr, &interpolate(b, work, xw, yw, scene.wrap));
                 }
                 let (d, g) = lobes.shade(scene, x, y, nrm[y * w + x], &tr);
                 diffuse.push(d);

@@ -201,7 +201,7 @@ pub struct Finisher {
     n: usize,
     sh_visibility: bool,
     light: Vec<[f64; 3]>,
-    tri: triple::Triple,
+    tri: &'static triple::Triple,
     cc: Vec<f64>,
 }
 
@@ -224,7 +224,7 @@ impl Finisher {
         } else {
             let v: Vec<f64> = raw.iter().map(|r| r[0]).collect();
             let per: Vec<Vec<f64>> = (0..3)
-                .map(|ch| triple::product(&self.tri, &self.light.iter().map(|l| l[ch]).collect::<Vec<_>>(), &v))
+                .map(|ch| triple::product(self.tri, &self.light.iter().map(|l| l[ch]).collect::<Vec<_>>(), &v))
                 .collect();
             (0..n * n).map(|k| [per[0][k], per[1][k], per[2][k]]).collect()
         };
