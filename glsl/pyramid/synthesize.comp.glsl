@@ -8,10 +8,12 @@
 // plane); pc.level = K | n_v << 16, where K is the stack's levels per channel (the finest K of
 // n_v; frame::pyramid::scan_stack_levels).
 // The stack is an array of 32-bit words (hfgi_store.glsl): one float each, or with HFGI_HALF
-// (the radiance stack with gi.storage = "f16") two halves each, written by the invocation of
-// the even value of the pair, which also computes the odd one (a decimated stack pads its
-// planes to even counts, so a word never straddles two planes), and stores both times the
-// pre-exposure pc.scale (frame::storage::pre_exposure).
+// (the radiance stack with gi.storage = "f16") two halves each: then an invocation computes
+// one word, values 2g and 2g + 1 of its plane for flat invocation index g = y·width + x (the
+// dispatch covers half the working grid's rows; a decimated stack pads its planes to even
+// counts, so a word never straddles two planes), and stores both times the pre-exposure
+// pc.scale (frame::storage::pre_exposure). One word per invocation, not one invocation per
+// value with the odd ones idle: lavapipe runs idle lanes as busy (docs/performance.md §21).
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const uint HFGI_HALF = 0u;
@@ -44,19 +46,25 @@ void main() {
     uint kept = pc.level & 0xffffu;
     uvec4 plane = hfgi_planes(z % kept);
     uvec2 size = plane.xy;
-    if (p.x >= size.x || p.y >= size.y) return;
-    uint t = p.y * size.x + p.x;
-    uint i = (z / kept) * hfgi_planes(kept).z + plane.z + t;
+    uint base = (z / kept) * hfgi_planes(kept).z + plane.z; // even with f16 (padded planes)
     if (HFGI_HALF == 0u) {
-        hfgi_stack[i] = floatBitsToUint(hfgi_synthesized(z, p, size));
+        if (p.x >= size.x || p.y >= size.y) return;
+        uint t = p.y * size.x + p.x;
+        hfgi_stack[base + t] = floatBitsToUint(hfgi_synthesized(z, p, size));
         // A decimated plane of odd count is padded by one value: 0, so the buffer's contents
         // are defined (read-backs see every value; the scan never reads the pad).
         uint count = size.x * size.y;
-        if (t + 1u == count && plane.z + count < hfgi_planes(z % kept + 1u).z) hfgi_stack[i + 1u] = 0u;
-    } else if ((i & 1u) == 0u) {
-        // Value i + 1: the next texel of the row, else the first of the next row, else padding.
-        uvec2 q = p.x + 1u < size.x ? uvec2(p.x + 1u, p.y) : uvec2(0u, p.y + 1u);
+        if (t + 1u == count && plane.z + count < hfgi_planes(z % kept + 1u).z) hfgi_stack[base + t + 1u] = 0u;
+    } else {
+        // Word g = p.y·size.x + p.x of the plane holds values t = 2g and t + 1: t's texel is
+        // (2p.x, 2p.y), or (2p.x − size.x, 2p.y + 1) past the row's end (2p.x < 2·size.x).
+        if (p.x >= size.x) return;
+        uvec2 e = 2u * p.x < size.x ? uvec2(2u * p.x, 2u * p.y) : uvec2(2u * p.x - size.x, 2u * p.y + 1u);
+        if (e.y >= size.y) return;
+        // Value t + 1: the next texel of the row, else the first of the next row, else padding.
+        uvec2 q = e.x + 1u < size.x ? uvec2(e.x + 1u, e.y) : uvec2(0u, e.y + 1u);
         float odd = q.y < size.y ? hfgi_synthesized(z, q, size) : 0.0;
-        hfgi_stack[i >> 1u] = hfgi_pack_pair(vec2(hfgi_synthesized(z, p, size), odd) * pc.scale, 0u, false);
+        uint t = e.y * size.x + e.x;
+        hfgi_stack[(base + t) >> 1u] = hfgi_pack_pair(vec2(hfgi_synthesized(z, e, size), odd) * pc.scale, 0u, false);
     }
 }

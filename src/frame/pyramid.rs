@@ -439,12 +439,14 @@ impl HeightPyramid {
                 let level = n | (self.layout.count() as u32) << 16;
                 let (scale, flags) = (self.stack_scale, self.raw_plane0 as u32);
                 let push = PyramidPush { level, wrap, out_width: ww, out_height: wh, scale, flags };
+                // An f16 stack: one invocation per word of two values, over half the rows.
+                let rows = if self.kind.stack_storage == Storage::F16 { wh.div_ceil(2) } else { wh };
                 p.dispatch(
                     ctx,
                     cmd,
                     self.synthesize_set,
                     bytemuck::bytes_of(&push),
-                    [groups(ww, crate::constants::WORKGROUP), groups(wh, crate::constants::WORKGROUP), n * channels],
+                    [groups(ww, crate::constants::WORKGROUP), groups(rows, crate::constants::WORKGROUP), n * channels],
                 );
                 barrier::compute_to_compute(ctx, cmd);
             });
