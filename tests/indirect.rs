@@ -344,6 +344,51 @@ fn gpu_matches_cpu_with_radial_probes_on_spikes() {
     assert!(change > 1e-2, "the probes changed the indirect light by only {change:e}");
 }
 
+/// The replay (docs/indirect.md §2, "Replay"): bounce 1's walk records the casting sets of the
+/// walk without probes and bounces 2 and 3 cast them without walking (their pipeline has no
+/// walk, so the recorded sets are all they can cast). On thin spikes below zero, non-square,
+/// with and without probes in bounce 1, sub-sampled and periodic: the same light as walking
+/// (`gi.replay = false`) within f32 rounding, the twin within its tolerance, and the sets' 8
+/// bytes per receiver and azimuth allocated only with the replay.
+#[test]
+fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
+    use hfgi::scene::generators::Generator;
+    let ctx = gpu();
+    let f = Generator::Spikes { seed: 4, count: 30, height: 0.15 }.generate(44, 30).unwrap();
+    let data: Vec<f32> = f.data().iter().map(|h| h - 12.0).collect();
+    let mut s = bright(HeightField::new("spikes", 44, 30, data, 4096).unwrap());
+    s.gi.bounces = 3;
+    for (probes, sub, wrap) in [(2, 1, false), (0, 1, false), (2, 2, false), (2, 1, true)] {
+        (s.gi.radial_probes, s.gi.subsample, s.wrap) = (probes, sub, wrap);
+        let what = format!("probes {probes}, subsample {sub}, wrap={wrap}");
+        let read = |ctx: &Context, r: &Renderer| (r.read_layers(ctx).unwrap(), r.memory_bytes());
+        let (replayed, with) = render_with(&ctx, &s, read);
+        s.gi.replay = false;
+        let (walked, without) = render_with(&ctx, &s, read);
+        s.gi.replay = true;
+        let (w, h) = (44usize.div_ceil(sub as usize), 30usize.div_ceil(sub as usize));
+        // (Without the replay the pass keeps a 16-byte placeholder, as for every unused buffer.)
+        assert_eq!(with - without, (w * h * 16 * 8 - 16) as u64, "{what}: the recorded sets' bytes");
+        for (name, a, b) in
+            [("indirect", &replayed.indirect, &walked.indirect), ("total", &replayed.total, &walked.total)]
+        {
+            let e = rel_l2(a, &b.iter().map(|v| v.map(f64::from)).collect::<Vec<_>>());
+            eprintln!("{what}: replayed vs walked {name} {e:.2e}");
+            assert!(e <= 1e-6, "{what}: replayed vs walked {name}: relative L2 {e:e}");
+        }
+        compare(&ctx, &s, &format!("replay, {what}"));
+    }
+    // Where it does not apply (later probes, fewer later azimuths, one bounce): no sets.
+    for (later_probes, later_m, bounces) in [(1, 16, 3), (0, 8, 3), (0, 16, 1)] {
+        (s.gi.radial_probes_later, s.gi.azimuths_later, s.gi.bounces) = (later_probes, later_m, bounces);
+        let with = render_with(&ctx, &s, |_, r| r.memory_bytes());
+        s.gi.replay = false;
+        let without = render_with(&ctx, &s, |_, r| r.memory_bytes());
+        s.gi.replay = true;
+        assert_eq!(with, without, "later probes {later_probes}, later azimuths {later_m}, {bounces} bounce(s)");
+    }
+}
+
 /// Later bounces with their own, smaller azimuth set (`gi.azimuths_later`, docs/performance.md
 /// §12), on a non-square field with heights below zero: GPU = twin for 2 and 3 bounces (the
 /// later set serves bounces 2 and 3), and the later set changes the light (the GPU differs from

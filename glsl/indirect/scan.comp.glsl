@@ -29,6 +29,11 @@ layout(constant_id = 10) const int HFGI_NU = 16;
 // 0: the pipeline of bounces without radial probes: the probes' code (a division and a ceil per
 // sample, and their loop state) is compiled out (docs/performance.md §17).
 layout(constant_id = 11) const uint HFGI_PROBES = 1u;
+// The replay of the later bounces' casting set (docs/indirect.md §2, "Replay";
+// rules::scene::replays): 0 off (every bounce walks), 1 the first bounce's walk, which also
+// finds the members a walk without probes has and stores them as bits (hfgi_members), 2 a later
+// bounce (no probes), which casts those members without walking (its walk is compiled out).
+layout(constant_id = 12) const uint HFGI_REPLAY = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_QUEUE = 2; // members a lane may hold before the subgroup casts (docs/performance.md §18)
 
@@ -54,6 +59,10 @@ layout(binding = 11) uniform usamplerBuffer hfgi_max_texels; // pyramid.max (f32
 layout(binding = 12) uniform usamplerBuffer hfgi_rplanes_texels;
 // The height stack's planes (hfgi_pyramid.glsl; stack mode).
 layout(binding = 13) uniform usamplerBuffer hfgi_hplanes_texels;
+// The later bounces' casting sets (HFGI_REPLAY ≠ 0): per azimuth j and receiver r the two words
+// (j·receivers + r)·2 and + 1, bit k (of the 64) set when ladder sample first + k is a member of
+// the walk without probes (rules::scene::REPLAY_STEPS: ladders of at most 64 samples).
+layout(std430, binding = 14) buffer Members { uvec2 hfgi_members[]; };
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 // What the scan reads per sample or per member it reads through texel views (HFGI_TEXELS,
 // hfgi_filter.glsl; docs/performance.md §17); only what it reads per receiver or writes is a
@@ -247,6 +256,16 @@ hfgi_Queue queue_empty() {
     return m;
 }
 
+// The members of the walk without probes, one bit per ladder sample (HFGI_REPLAY = 1): bits
+// 0–31 and 32–63 of sample k = i − first. Set as the walk finds them, stored at the ray's end.
+uvec2 hfgi_plain;
+
+void plain_record(int i, int first) {
+    int k = i - first;
+    uint one = 1u << uint(k & 31);
+    hfgi_plain |= k < 32 ? uvec2(one, 0u) : uvec2(0u, one);
+}
+
 // A sample at step t with height difference dh (eq. 15 multiplied out): if it rises above the
 // walk's horizon it is a member: queued, and the walk's horizon becomes its slope.
 void queue_sample(inout hfgi_Queue m, inout float walk_slope, float dh, float t, int i, float texel) {
@@ -300,7 +319,9 @@ void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax,
                 break;
             }
             uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-            queue_sample(m, walk_slope, hfgi_height_at(scan, lv, q) - hfgi_base[lv], t, i, scan.texel_size);
+            float dh = hfgi_height_at(scan, lv, q) - hfgi_base[lv];
+            if (HFGI_REPLAY == 1u && dh > walk_slope * (t * scan.texel_size)) plain_record(i, scan.first);
+            queue_sample(m, walk_slope, dh, t, i, scan.texel_size);
             ++i;
             t *= ratio;
             if (subgroupAny(m.count == HFGI_QUEUE)) break;
@@ -313,9 +334,14 @@ void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax,
 // texel past the previous one, level-0 samples in the gap, at most one per texel of it (thin
 // spikes the ladder steps over; docs/accuracy.md §4). One walk over probes and samples, not two
 // nested loops: lavapipe pays for an inner loop even when it runs no iteration.
+// With HFGI_REPLAY = 1 it also finds the members of the walk without probes (the later bounces'
+// casting set): the samples above that walk's own horizon plain_slope, compared and updated
+// with the arithmetic of scan_ray_plain; and it walks on until that horizon, never above its
+// own, ends the ray too (the same early stop, so at the same sample).
 void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
               inout vec3 u[HFGI_NE]) {
     float running_slope = tan(running), walk_slope = running_slope;
+    float plain_slope = running_slope;
     float t_prev = 0.0, t = 0.0;
     uint lv = 0u;
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
@@ -341,12 +367,17 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
             }
             bool probe = s2 <= np;
             float tp = probe ? t_prev + (t - t_prev) * float(s2) / float(np + 1) : t;
-            if (hfgi_nothing_beyond(bounded, gmax, bmin, walk_slope, tp, scan.texel_size)) {
+            float stop_slope = HFGI_REPLAY == 1u ? plain_slope : walk_slope;
+            if (hfgi_nothing_beyond(bounded, gmax, bmin, stop_slope, tp, scan.texel_size)) {
                 more = false;
                 break;
             }
             uint lq = probe ? 0u : lv;
             float dh = hfgi_height_at(scan, lq, scan.p + tp * d) - hfgi_base[lq];
+            if (HFGI_REPLAY == 1u && !probe && dh > plain_slope * (tp * scan.texel_size)) {
+                plain_record(i, scan.first);
+                plain_slope = dh / (tp * scan.texel_size);
+            }
             queue_sample(m, walk_slope, dh, tp, i, scan.texel_size); // a probe reads sample i's radiance level
             if (probe) {
                 ++s2;
@@ -358,6 +389,30 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
             if (subgroupAny(m.count == HFGI_QUEUE)) break;
         }
         queue_cast(m, u, running, running_slope, scan, d, wrap);
+    }
+}
+
+// The casting set of the walk without probes along d (HFGI_REPLAY = 2; docs/indirect.md §2),
+// from the bits the first bounce's walk stored: each member's step t as the walk computes it
+// (t_first times the ratio once per sample), its height read once, and its cast — the same
+// members, slopes and casts as scan_ray_plain, without the walk. Lanes cast one member each per
+// iteration.
+void replay_ray(hfgi_Scan scan, vec2 d, bool wrap, float running, inout vec3 u[HFGI_NE], uvec2 bits) {
+    float running_slope = tan(running);
+    float ratio = hfgi_scan_ratio(scan);
+    int k = 0;
+    float t = hfgi_scan_t(scan, scan.first, HFGI_NV);
+    while (bits != uvec2(0u)) {
+        int next = bits.x != 0u ? findLSB(bits.x) : 32 + findLSB(bits.y);
+        if (bits.x != 0u) bits.x &= bits.x - 1u; else bits.y &= bits.y - 1u;
+        while (k < next) {
+            t *= ratio;
+            ++k;
+        }
+        int i = scan.first + k;
+        uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
+        float dh = hfgi_height_at(scan, lv, scan.p + t * d) - hfgi_base[lv];
+        cast_member(u, running, running_slope, dh / (t * scan.texel_size), i, scan.p + t * d, d, scan, wrap);
     }
 }
 
@@ -402,10 +457,17 @@ void main() {
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }
-        if (HFGI_PROBES == 0u) {
-            scan_ray_plain(scan, d, wrap, bounded, gmax, bmin, running, u);
+        uint slot = j * (pc.work_width * pc.work_height) + r.y * pc.work_width + r.x;
+        if (HFGI_REPLAY == 2u) {
+            replay_ray(scan, d, wrap, running, u, hfgi_members[slot]);
         } else {
-            scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
+            hfgi_plain = uvec2(0u);
+            if (HFGI_PROBES == 0u) {
+                scan_ray_plain(scan, d, wrap, bounded, gmax, bmin, running, u);
+            } else {
+                scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
+            }
+            if (HFGI_REPLAY == 1u) hfgi_members[slot] = hfgi_plain;
         }
         // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows, each padded to
         // HFGI_NQ vec4s, shared::gpu_fold: the same sum, a third of the fetches).

@@ -34,6 +34,7 @@ use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
 
 mod scan;
+use crate::rules::scene::{replay_bytes, replays};
 pub(crate) use scan::check_subgroup_vote;
 use scan::{scan_chunks, scan_kinds, scan_pipelines, scan_push, PushGet, ScanKind};
 
@@ -49,10 +50,14 @@ pub struct IndirectPass {
     scans: Vec<(ScanKind, ComputePipeline, vk::DescriptorSet)>,
     shade: ComputePipeline,
     shade_set: vk::DescriptorSet,
-    buffers: Vec<Buffer>, // samples, fold, radiance levels, U
+    buffers: Vec<Buffer>, // samples, fold, radiance levels, U, recorded casting sets
     push: IndirectPush,
     /// Radial probes of bounce 1 and of the later bounces (`GiSettings::probes`).
     probes: [u32; 2],
+    /// Whether the later bounces cast the casting sets the first bounce's walk recorded
+    /// ([`replays`]): then the pass has two pipelines, the first bounce's (walking and
+    /// recording) and the later ones' (casting without a walk).
+    replay: bool,
     /// Azimuth chunks `(first, count)`, one dispatch each: of the first bounce's scan and of
     /// the later ones' (their probes and azimuth sets may differ, and a probe is a loop
     /// iteration like a sample).
@@ -115,22 +120,26 @@ pub(crate) fn radiance_stack_levels(levels: &[u32]) -> usize {
 }
 
 /// The pass's own buffers `(name, bytes)` in creation order (each at least 16 bytes), for a
-/// `work` grid and [`ScanData`] of `samples` samples, `fold` floats and `ladder` steps.
+/// `work` grid and [`ScanData`] of `samples` samples, `fold` floats and `ladder` steps; the
+/// recorded casting sets only with the replay ([`replays`]; else 16 bytes nothing reads).
 pub(crate) fn buffer_sizes(
     scene: &Scene,
     work: (u32, u32),
     samples: usize,
     fold: usize,
     ladder: usize,
-) -> [(&'static str, u64); 4] {
+) -> [(&'static str, u64); 5] {
     // U: receivers × u_coefficients × rgb in gi.storage (glsl/inc/hfgi_store.glsl).
     let u = 3 * u_coefficients(scene);
     let u_bytes = scene.gi.storage.bytes((work.0 as u64 * work.1 as u64) * scene.gi.storage.stride(u) as u64);
+    let grid = (work.0 as usize, work.1 as usize);
+    let members = if replays(scene, grid, ladder) { replay_bytes(scene, grid) } else { 0 };
     [
         ("hfgi.indirect.samples", samples as u64 * 16),
         ("hfgi.indirect.fold", fold as u64 * 4),
         ("hfgi.indirect.radiance_level", ladder as u64 * 4),
         ("hfgi.indirect.u", u_bytes),
+        ("hfgi.indirect.members", members),
     ]
     .map(|(name, size)| (name, size.max(16)))
 }
@@ -204,12 +213,19 @@ fn radiance_pyramid(
 }
 
 const U: usize = 3;
+const MEMBERS: usize = 4;
 
 /// The texel views of the scan's own buffers ([`buffer_sizes`]' order): the samples and the fold
 /// matrices' padded rows are `uvec4`s, the radiance levels and `U` (which the scan writes as a
-/// storage buffer and the indirect shade reads through the view) 32-bit words.
-const BUFFER_VIEWS: [vk::Format; 4] =
-    [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT, vk::Format::R32_UINT];
+/// storage buffer and the indirect shade reads through the view) 32-bit words; the recorded
+/// casting sets are a storage buffer only (their view, of words, is unused).
+const BUFFER_VIEWS: [vk::Format; 5] = [
+    vk::Format::R32G32B32A32_UINT,
+    vk::Format::R32G32B32A32_UINT,
+    vk::Format::R32_UINT,
+    vk::Format::R32_UINT,
+    vk::Format::R32_UINT,
+];
 
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
@@ -236,7 +252,8 @@ impl IndirectPass {
         let mut radiance = None;
         let mut max = None;
         let has_max = uses_max_bound(scene);
-        let kinds = scan_kinds(scene);
+        let replay = replays(scene, (ww as usize, wh as usize), ladder.len());
+        let kinds = scan_kinds(scene, replay);
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
             let sizes = buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len());
             for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
@@ -256,6 +273,9 @@ impl IndirectPass {
             memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
+            // Defined sets before the first bounce records any (a later bounce recorded alone
+            // casts no member rather than reading garbage).
+            memory::zero(ctx, &bufs[MEMBERS])?;
             let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
             let consts = shade.bindings()[3];
             let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
@@ -276,6 +296,7 @@ impl IndirectPass {
                 // Pyramid mode has no stack and no planes: any view of uvec4s.
                 Bind::Texel(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
                 Bind::Texel(pyramid.height_planes()),
+                Bind::Buffer(&bufs[MEMBERS]),
             ];
             let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
             let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;
@@ -307,6 +328,7 @@ impl IndirectPass {
             chunks: scan_chunks(gi, ladder.len(), sets),
             push,
             probes: [gi.probes(1), gi.probes(2)],
+            replay,
             shade_push: shade.push(),
             u_coefficients: u_coefficients(scene),
             storage: gi.storage,
@@ -354,16 +376,24 @@ impl IndirectPass {
 
     /// Records the scan of bounce `bounce` (1-based) of the radiance pyramid (stage
     /// `indirect.scan`).
+    /// With the replay a later bounce casts the casting sets that the last recorded scan of
+    /// bounce 1 stored (docs/indirect.md §2): record bounce 1 first whenever the heights change
+    /// ([`IndirectPass::record`] does).
     pub fn record_scan(&self, rec: &mut Recorder, bounce: u32) {
-        let probes = self.probes[(bounce > 1) as usize];
-        let kind = ScanKind::of(probes);
-        // The pipeline of this kind, else one that serves it exactly (scan_kinds creates one).
-        let (_, scan, set) = self
-            .scans
-            .iter()
-            .find(|s| s.0 == kind)
-            .or_else(|| self.scans.iter().find(|s| s.0.serves(kind)))
-            .unwrap_or(&self.scans[0]);
+        let later = bounce > 1;
+        let probes = self.probes[later as usize];
+        // The pipeline of this kind, else one that serves it exactly (scan_kinds creates one);
+        // with the replay the first (walking and recording) or the second (casting).
+        let (_, scan, set) = if self.replay {
+            &self.scans[later as usize]
+        } else {
+            let kind = ScanKind::of(probes);
+            self.scans
+                .iter()
+                .find(|s| s.0 == kind)
+                .or_else(|| self.scans.iter().find(|s| s.0.serves(kind)))
+                .unwrap_or(&self.scans[0])
+        };
         rec.scope(STAGE_SCAN, |ctx, cmd| {
             let g = [
                 groups(self.push.work_width, crate::constants::WORKGROUP),
@@ -373,7 +403,7 @@ impl IndirectPass {
             // Every bounce stops early when the pass has the max pyramid (docs/performance.md §18).
             let bound = if self.max.is_some() { FLAG_MAX_BOUND } else { 0 };
             // Azimuth chunks against lavapipe's loop limit; the later ones accumulate into U.
-            for (i, (first, count)) in self.chunks[(bounce > 1) as usize].iter().enumerate() {
+            for (i, (first, count)) in self.chunks[later as usize].iter().enumerate() {
                 let flags = self.push.flags | bound | if i > 0 { FLAG_ACCUMULATE } else { 0 };
                 let push = IndirectPush { sample_offset: *first, sample_count: *count, flags, probes, ..self.push };
                 scan.dispatch(ctx, cmd, *set, bytemuck::bytes_of(&push), g);

@@ -211,6 +211,9 @@ pub struct Planner {
     azimuths: u32,
     /// The indirect scans' azimuths of bounces 2 and later (`gi.azimuths_later`, at most m).
     azimuths_later: u32,
+    /// Whether the later bounces cast the casting sets bounce 1 recorded
+    /// ([`crate::rules::scene::replays`]).
+    replay: bool,
     key_lights: usize,
     key_light_azimuths: u32,
     local_lights: usize,
@@ -266,6 +269,7 @@ impl Planner {
             environment: has_environment(scene),
             azimuths: gi.azimuths,
             azimuths_later: gi.scan_azimuths(2),
+            replay: crate::rules::scene::replays(scene, gi.working_size(size.0, size.1), ladder.len()),
             key_lights: scene.key_lights.len(),
             key_light_azimuths: gi.key_light_azimuths,
             local_lights: scene.local_lights.len(),
@@ -483,7 +487,12 @@ impl Planner {
                     add(&mut omitted, Stage::RadianceSynthesize(0), why.into());
                 }
                 let m = if b == 1 { self.azimuths } else { self.azimuths_later };
-                let r = format!("{of}: IR vector per receiver ({m} azimuths)");
+                let replay = match (self.replay, b) {
+                    (false, _) => "",
+                    (true, 1) => "; records the later bounces' casting sets (gi.replay)",
+                    (true, _) => "; casts the casting sets bounce 1 recorded, without walking (gi.replay)",
+                };
+                let r = format!("{of}: IR vector per receiver ({m} azimuths){replay}");
                 add(&mut stages, Stage::IndirectScan(b), r);
                 let acc = if b == 1 { "writes the indirect planes" } else { "adds to the indirect planes" };
                 add(&mut stages, Stage::IndirectShade(b), format!("{of}: {acc}"));

@@ -29,6 +29,39 @@ pub fn needs_indirect(scene: &Scene) -> bool {
     scene.gi.bounces > 0 && (albedo || specular)
 }
 
+/// The most memory the later bounces' recorded casting sets may take ([`replay_bytes`]);
+/// beyond it they walk their rays (docs/indirect.md §2, "Replay").
+pub const REPLAY_BUDGET: u64 = 32 << 20;
+
+/// The longest ladder (samples per ray: `n_v` + near + far steps) whose casting set a ray
+/// records: one bit per sample in two 32-bit words (`glsl/indirect/scan.comp.glsl`).
+pub const REPLAY_STEPS: usize = 64;
+
+/// Bytes of the recorded casting sets on a `work` grid: two 32-bit words per receiver and
+/// azimuth of the first bounce.
+pub fn replay_bytes(scene: &Scene, work: (usize, usize)) -> u64 {
+    work.0 as u64 * work.1 as u64 * scene.gi.azimuths as u64 * 8
+}
+
+/// Whether the indirect scans of bounces 2 and later cast a casting set the first bounce's scan
+/// recorded instead of walking their rays (docs/indirect.md §2, "Replay"). The casting set of a
+/// ray depends on the heights alone, and a later bounce's — the walk without radial probes — is
+/// found by the first bounce's walk as well (the samples above that walk's own horizon), so the
+/// later bounces cast exactly the members they would walk to. With `gi.replay`, two or more
+/// bounces, none of the later ones probing (`gi.radial_probes_later = 0`), on the first one's
+/// azimuths (`gi.azimuths_later` = `gi.azimuths`), a ladder of at most [`REPLAY_STEPS`] samples
+/// (`ladder`) and the sets within [`REPLAY_BUDGET`] on the `work` grid.
+pub fn replays(scene: &Scene, work: (usize, usize), ladder: usize) -> bool {
+    let gi = &scene.gi;
+    gi.replay
+        && needs_indirect(scene)
+        && gi.bounces >= 2
+        && gi.probes(2) == 0
+        && gi.scan_azimuths(2) == gi.azimuths
+        && ladder <= REPLAY_STEPS
+        && replay_bytes(scene, work) <= REPLAY_BUDGET
+}
+
 /// Whether the indirect light uses the glossy SH vector pyramid (docs/indirect.md §1).
 pub fn vector_pyramid(scene: &Scene) -> bool {
     use crate::scene::model::GlossyPyramid;
@@ -62,7 +95,33 @@ pub fn u_coefficients(scene: &Scene) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::u_bands;
+    use super::{replay_bytes, replays, u_bands};
+
+    /// The replay's conditions (docs/indirect.md §2): the `default` preset with two bounces
+    /// replays at 128² (4 MiB of sets) and 256² (16 MiB), not at 512² (64 MiB > the budget), nor
+    /// with `gi.replay = false`, one bounce, later probes, fewer later azimuths or a ladder
+    /// longer than 64 samples (`high`'s 107 at 128²).
+    #[test]
+    fn the_replay_applies_where_the_later_walks_are_recorded_and_fit() {
+        let mut s = crate::scene::file::default_scene().unwrap();
+        s.gi.bounces = 2;
+        let ladder = 35; // n_v 29 + 4 near + 2 far steps at 128²
+        assert!(replays(&s, (128, 128), ladder) && replays(&s, (256, 256), ladder + 4));
+        assert_eq!(replay_bytes(&s, (128, 128)), 4 << 20);
+        assert!(!replays(&s, (512, 512), ladder + 8), "64 MiB is over the budget");
+        assert!(replays(&s, (512, 256), ladder + 8), "32 MiB is within it");
+        assert!(!replays(&s, (128, 128), 65), "a ladder of 65 samples");
+        let off = |f: &dyn Fn(&mut crate::scene::model::Scene)| {
+            let mut t = s.clone();
+            f(&mut t);
+            !replays(&t, (128, 128), ladder)
+        };
+        assert!(off(&|t| t.gi.replay = false));
+        assert!(off(&|t| t.gi.bounces = 1));
+        assert!(off(&|t| t.gi.radial_probes_later = 1));
+        assert!(off(&|t| t.gi.azimuths_later = 16));
+        assert!(!off(&|t| t.gi.radial_probes = 0), "bounce 1 without probes records its own set");
+    }
 
     /// The clamped cosine's ZH vanishes in the odd bands l ≥ 3 (Ramamoorthi & Hanrahan 2001,
     /// A_l = 0 for odd l > 1), so a diffuse surface keeps bands up to the last even one below

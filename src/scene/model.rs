@@ -381,6 +381,10 @@ pub struct GiSettings {
     pub radial_probes: u32,
     /// The same for the scans of bounces 2 and later (which carry less light), 0..=16.
     pub radial_probes_later: u32,
+    /// Bounces 2 and later cast the casting sets the first bounce's walk recorded instead of
+    /// walking their rays (the same members; `rules::scene::replays`: without later probes,
+    /// within a memory budget; docs/indirect.md §2).
+    pub replay: bool,
     /// Far end of the ladder.
     pub scan_reach: ScanReach,
     /// Lower end of the casting set.
@@ -463,6 +467,7 @@ impl GiSettings {
             near_steps: if paper { 0 } else { near },
             radial_probes: probes.0,
             radial_probes_later: probes.1,
+            replay: true,
             scan_reach: if paper { ScanReach::Side } else { ScanReach::Diagonal },
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
@@ -496,6 +501,7 @@ impl GiSettings {
             visibility: self.visibility,
             storage: self.storage,
             sweep_near: self.sweep_near,
+            replay: self.replay,
             ..GiSettings::preset(q)
         }
     }
@@ -507,7 +513,7 @@ impl GiSettings {
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
              radial_probes={} radial_probes_later={} azimuths_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
-             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={}",
+             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={} replay={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -538,7 +544,8 @@ impl GiSettings {
             self.blocker_exp,
             self.blocker_shading,
             self.blocker_log_cap,
-            self.blocker_key_lights
+            self.blocker_key_lights,
+            self.replay
         )
     }
 

@@ -47,26 +47,39 @@ pub(super) fn scan_push(
     }
 }
 
-/// What a scan pipeline compiles in (specialization constant 11 of
-/// `glsl/indirect/scan.comp.glsl`): the radial probes. lavapipe runs code on every lane whether
-/// a uniform flag skips it or not (docs/performance.md §12, §17). The max-pyramid bound is no
-/// longer a kind (§18): it is the early stop alone, a comparison per sample, and every bounce of
-/// a pass with the max pyramid stops early (`HFGI_FLAG_MAX_BOUND`).
+/// What a scan pipeline compiles in (specialization constants 11 and 12 of
+/// `glsl/indirect/scan.comp.glsl`): the radial probes, and its part in the replay of the later
+/// bounces' casting sets. lavapipe runs code on every lane whether a uniform flag skips it or not
+/// (docs/performance.md §12, §17). The max-pyramid bound is no longer a kind (§18): it is the
+/// early stop alone, a comparison per sample, and every bounce of a pass with the max pyramid
+/// stops early (`HFGI_FLAG_MAX_BOUND`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct ScanKind {
     pub probes: bool,
+    pub replay: Replay,
+}
+
+/// A scan's part in the replay (`rules::scene::replays`, docs/indirect.md §2): none (every
+/// bounce walks), the first bounce's walk that also records the later bounces' casting sets, or
+/// a later bounce that casts them without walking.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Replay {
+    Off = 0,
+    Record = 1,
+    Cast = 2,
 }
 
 impl ScanKind {
-    /// The kind that scans a bounce with `probes` radial probes exactly and fastest.
+    /// The kind that scans a bounce with `probes` radial probes exactly and fastest, without
+    /// the replay.
     pub fn of(probes: u32) -> Self {
-        Self { probes: probes > 0 }
+        Self { probes: probes > 0, replay: Replay::Off }
     }
 
     /// Whether a pipeline of this kind scans a bounce of kind `k` exactly: probes are a dynamic
     /// count (probe code with 0 probes scans none); compiled-out code cannot run.
     pub fn serves(self, k: ScanKind) -> bool {
-        self.probes || !k.probes
+        (self.probes || !k.probes) && self.replay == k.replay
     }
 }
 
@@ -88,8 +101,14 @@ pub(crate) fn check_subgroup_vote(info: &crate::vk::DeviceInfo) -> Result<()> {
 /// The scan pipelines a scene gets: the first bounce's kind and, when later bounces differ,
 /// theirs: when the scene has later bounces, or when the first's pipeline could not scan one
 /// (a bounce past `gi.bounces` takes the first otherwise, which scans it exactly).
-pub(super) fn scan_kinds(scene: &Scene) -> Vec<ScanKind> {
+/// With `replay` ([`crate::rules::scene::replays`]) the first bounce's walk records the later
+/// bounces' casting sets and they cast them (their pipeline has no walk).
+pub(super) fn scan_kinds(scene: &Scene, replay: bool) -> Vec<ScanKind> {
     let gi = &scene.gi;
+    if replay {
+        let first = ScanKind { replay: Replay::Record, ..ScanKind::of(gi.probes(1)) };
+        return vec![first, ScanKind { probes: false, replay: Replay::Cast }];
+    }
     let first = ScanKind::of(gi.probes(1));
     let later = ScanKind::of(gi.probes(2));
     if later != first && (gi.bounces > 1 || !first.serves(later)) {
@@ -113,6 +132,7 @@ pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: Sc
         (8, gi.storage.spec()),
         (10, u_coefficients(scene) as u32),
         (11, kind.probes as u32),
+        (12, kind.replay as u32),
     ];
     [&own[..], &crate::frame::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }
@@ -156,12 +176,13 @@ pub(super) fn scan_pipelines(
 
 /// The scan's bindings (glsl/indirect/scan.comp.glsl): storage buffers but for the texel
 /// buffers it reads per sample (docs/performance.md §17).
-pub(super) const SCAN_BINDINGS: [DescriptorKind; 14] = {
-    let mut k = [DescriptorKind::TexelBuffer; 14];
+pub(super) const SCAN_BINDINGS: [DescriptorKind; 15] = {
+    let mut k = [DescriptorKind::TexelBuffer; 15];
     k[1] = DescriptorKind::StorageBuffer; // the level tables and the shading constants: read per receiver
     k[4] = DescriptorKind::StorageBuffer;
     k[9] = DescriptorKind::StorageBuffer; // U: written
     k[10] = DescriptorKind::StorageBuffer;
+    k[14] = DescriptorKind::StorageBuffer; // the recorded casting sets: written by bounce 1, read by the later ones
     k
 };
 
@@ -207,15 +228,21 @@ mod tests {
     fn scan_kinds_cover_every_bounce_with_code_it_runs() {
         let mut s = crate::scene::file::default_scene().expect("default scene");
         s.gi.bounces = 2;
-        let (probing, bare) = (ScanKind { probes: true }, ScanKind { probes: false });
-        assert_eq!(scan_kinds(&s), vec![probing, bare]);
+        let (probing, bare) = (ScanKind::of(1), ScanKind::of(0));
+        assert_eq!(scan_kinds(&s, false), vec![probing, bare]);
         s.gi.bounces = 1;
-        assert_eq!(scan_kinds(&s), vec![probing]);
+        assert_eq!(scan_kinds(&s, false), vec![probing]);
         (s.gi.radial_probes, s.gi.radial_probes_later) = (0, 1);
-        assert_eq!(scan_kinds(&s), vec![bare, probing]);
+        assert_eq!(scan_kinds(&s, false), vec![bare, probing]);
         (s.gi.radial_probes, s.gi.radial_probes_later) = (0, 0);
         s.gi.bounces = 3;
-        assert_eq!(scan_kinds(&s), vec![bare]);
+        assert_eq!(scan_kinds(&s, false), vec![bare]);
+        // The replay: a recording first bounce (with its probes) and a casting later one.
+        s.gi.radial_probes = 2;
+        let record = ScanKind { probes: true, replay: Replay::Record };
+        let cast = ScanKind { probes: false, replay: Replay::Cast };
+        assert_eq!(scan_kinds(&s, true), vec![record, cast]);
+        assert!(!record.serves(cast) && !cast.serves(record) && !probing.serves(record));
         for a in [probing, bare] {
             assert!(a.serves(a) && probing.serves(a), "{a:?}");
         }
