@@ -314,17 +314,22 @@ fn gpu_matches_cpu_at_the_highest_sh_order() {
     }
 }
 
+/// 30 one-texel spikes (up to 0.15 of the width high) on a 44 × 30 field lowered below zero.
+fn spikes_below_zero() -> HeightField {
+    use hfgi::scene::generators::Generator;
+    let f = Generator::Spikes { seed: 4, count: 30, height: 0.15 }.generate(44, 30).unwrap();
+    let data: Vec<f32> = f.data().iter().map(|h| h - 12.0).collect();
+    HeightField::new("spikes", 44, 30, data, 4096).unwrap()
+}
+
 /// Radial probes (docs/accuracy.md §4) on thin spikes, non-square, heights below zero, 2 bounces
 /// with different probe counts: GPU (with the max-pyramid bound, and without it on a periodic
 /// field) = twin (which probes every interval), and the probes change the light (so neither
 /// side can ignore them unnoticed).
 #[test]
 fn gpu_matches_cpu_with_radial_probes_on_spikes() {
-    use hfgi::scene::generators::Generator;
     let ctx = gpu();
-    let f = Generator::Spikes { seed: 4, count: 30, height: 0.15 }.generate(44, 30).unwrap();
-    let data: Vec<f32> = f.data().iter().map(|h| h - 12.0).collect();
-    let mut s = bright(HeightField::new("spikes", 44, 30, data, 4096).unwrap());
+    let mut s = bright(spikes_below_zero());
     s.gi.bounces = 2;
     s.gi.radial_probes = 3;
     s.gi.radial_probes_later = 2;
@@ -352,11 +357,8 @@ fn gpu_matches_cpu_with_radial_probes_on_spikes() {
 /// bytes per receiver and azimuth allocated only with the replay.
 #[test]
 fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
-    use hfgi::scene::generators::Generator;
     let ctx = gpu();
-    let f = Generator::Spikes { seed: 4, count: 30, height: 0.15 }.generate(44, 30).unwrap();
-    let data: Vec<f32> = f.data().iter().map(|h| h - 12.0).collect();
-    let mut s = bright(HeightField::new("spikes", 44, 30, data, 4096).unwrap());
+    let mut s = bright(spikes_below_zero());
     s.gi.bounces = 3;
     for (probes, sub, wrap) in [(2, 1, false), (0, 1, false), (2, 2, false), (2, 1, true)] {
         (s.gi.radial_probes, s.gi.subsample, s.wrap) = (probes, sub, wrap);
