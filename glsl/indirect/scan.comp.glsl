@@ -266,11 +266,22 @@ void plain_record(int i, int first) {
     hfgi_plain |= k < 32 ? uvec2(one, 0u) : uvec2(0u, one);
 }
 
-// A sample at step t with height difference dh (eq. 15 multiplied out): if it rises above the
-// walk's horizon it is a member: queued, and the walk's horizon becomes its slope.
+// Whether a sample at step t with height difference dh rises above the horizon `slope` (eq. 15
+// multiplied out); if so the horizon becomes its slope. The one comparison of every walk: the
+// probed walk's, and the probe-less walk's whose members the replay records (so both find the
+// same members, docs/indirect.md §2).
+bool rises(inout float slope, float dh, float t, float texel) {
+    if (dh > slope * (t * texel)) {
+        slope = dh / (t * texel);
+        return true;
+    }
+    return false;
+}
+
+// A sample at step t with height difference dh: if it rises above the walk's horizon it is a
+// member, queued.
 void queue_sample(inout hfgi_Queue m, inout float walk_slope, float dh, float t, int i, float texel) {
-    if (dh > walk_slope * (t * texel)) {
-        walk_slope = dh / (t * texel);
+    if (rises(walk_slope, dh, t, texel)) {
         [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
             if (k == m.count) {
                 m.slope[k] = walk_slope;
@@ -319,9 +330,9 @@ void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax,
                 break;
             }
             uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-            float dh = hfgi_height_at(scan, lv, q) - hfgi_base[lv];
-            if (HFGI_REPLAY == 1u && dh > walk_slope * (t * scan.texel_size)) plain_record(i, scan.first);
-            queue_sample(m, walk_slope, dh, t, i, scan.texel_size);
+            int count = m.count;
+            queue_sample(m, walk_slope, hfgi_height_at(scan, lv, q) - hfgi_base[lv], t, i, scan.texel_size);
+            if (HFGI_REPLAY == 1u && m.count > count) plain_record(i, scan.first); // every member is one
             ++i;
             t *= ratio;
             if (subgroupAny(m.count == HFGI_QUEUE)) break;
@@ -335,8 +346,8 @@ void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax,
 // spikes the ladder steps over; docs/accuracy.md §4). One walk over probes and samples, not two
 // nested loops: lavapipe pays for an inner loop even when it runs no iteration.
 // With HFGI_REPLAY = 1 it also finds the members of the walk without probes (the later bounces'
-// casting set): the samples above that walk's own horizon plain_slope, compared and updated
-// with the arithmetic of scan_ray_plain; and it walks on until that horizon, never above its
+// casting set): the samples above that walk's own horizon plain_slope, found by `rises` as
+// scan_ray_plain finds them; and it walks on until that horizon, never above its
 // own, ends the ray too (the same early stop, so at the same sample).
 void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float bmin, float running,
               inout vec3 u[HFGI_NE]) {
@@ -374,10 +385,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
             }
             uint lq = probe ? 0u : lv;
             float dh = hfgi_height_at(scan, lq, scan.p + tp * d) - hfgi_base[lq];
-            if (HFGI_REPLAY == 1u && !probe && dh > plain_slope * (tp * scan.texel_size)) {
-                plain_record(i, scan.first);
-                plain_slope = dh / (tp * scan.texel_size);
-            }
+            if (HFGI_REPLAY == 1u && !probe && rises(plain_slope, dh, tp, scan.texel_size)) plain_record(i, scan.first);
             queue_sample(m, walk_slope, dh, tp, i, scan.texel_size); // a probe reads sample i's radiance level
             if (probe) {
                 ++s2;
@@ -411,8 +419,9 @@ void replay_ray(hfgi_Scan scan, vec2 d, bool wrap, float running, inout vec3 u[H
         }
         int i = scan.first + k;
         uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-        float dh = hfgi_height_at(scan, lv, scan.p + t * d) - hfgi_base[lv];
-        cast_member(u, running, running_slope, dh / (t * scan.texel_size), i, scan.p + t * d, d, scan, wrap);
+        vec2 q = scan.p + t * d;
+        cast_member(u, running, running_slope, (hfgi_height_at(scan, lv, q) - hfgi_base[lv]) / (t * scan.texel_size),
+                    i, q, d, scan, wrap);
     }
 }
 

@@ -274,8 +274,10 @@ impl IndirectPass {
             memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
             memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
             // Defined sets before the first bounce records any (a later bounce recorded alone
-            // casts no member rather than reading garbage).
-            memory::zero(ctx, &bufs[MEMBERS])?;
+            // casts no member rather than reading garbage); without the replay nothing reads them.
+            if replay {
+                memory::zero(ctx, &bufs[MEMBERS])?;
+            }
             let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
             let consts = shade.bindings()[3];
             let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
