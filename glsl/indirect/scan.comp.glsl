@@ -13,7 +13,6 @@ layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // height-pyramid levels n_v (scan samples)
 layout(constant_id = 2) const int HFGI_VECTOR = 0; // 1: glossy vector pyramid (docs/indirect.md §1–2)
 layout(constant_id = 3) const int HFGI_NE = 4;     // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
-const int HFGI_NQ = (HFGI_NE + 3) / 4;              // vec4s per row of the fold (shared::gpu_fold)
 // Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap, flags without
 // the dynamic bits, and radiance_stack): branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 4) const uint HFGI_STACK = 1u;
@@ -34,6 +33,7 @@ layout(constant_id = 11) const uint HFGI_PROBES = 1u;
 // finds the members a walk without probes has and stores them as bits (hfgi_members), 2 a later
 // bounce (no probes), which casts those members without walking (its walk is compiled out).
 layout(constant_id = 12) const uint HFGI_REPLAY = 0u;
+layout(constant_id = 13) const int HFGI_FOLD_SIZE = 1; // vec4 texels of A_j per azimuth (shared::fold_texels)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_QUEUE = 2; // members a lane may hold before the subgroup casts (docs/performance.md §18)
 
@@ -44,7 +44,7 @@ layout(binding = 3) uniform usamplerBuffer hfgi_radiance_levels_texels; // radia
 layout(std430, binding = 4) readonly buffer RTable { hfgi_Level hfgi_radiance_table[]; };
 layout(binding = 5) uniform usamplerBuffer hfgi_radiance_stack_texels; // words of gi.storage (hfgi_store.glsl)
 layout(binding = 6) uniform usamplerBuffer hfgi_samples_texels; // cos φ, sin φ, 0, 0 (f32 bits)
-layout(binding = 7) uniform usamplerBuffer hfgi_fold_texels; // A_j: n² rows of NQ uvec4s (NE floats, zero-padded)
+layout(binding = 7) uniform usamplerBuffer hfgi_fold_texels; // A_j per azimuth (hfgi_fold.glsl, shared::gpu_fold)
 layout(binding = 8) uniform usamplerBuffer hfgi_radiance_level_texels; // per scan sample, from `first`
 layout(std430, binding = 9) buffer U { uint hfgi_u[]; };                      // receivers × n² × rgb, over azimuth chunks (hfgi_store.glsl)
 layout(std430, binding = 10) readonly buffer Consts {                         // the shading constants
@@ -84,6 +84,7 @@ float hfgi_unexpose;
 #include "hfgi_sh.glsl"
 #include "hfgi_max.glsl"
 #include "hfgi_receiver.glsl"
+#include "hfgi_fold.glsl"
 
 float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_NU];
@@ -478,19 +479,9 @@ void main() {
             }
             if (HFGI_REPLAY == 1u) hfgi_members[slot] = hfgi_plain;
         }
-        // eq. 19–21 folded: U += A_j u_j (the stored coefficients; A_j has n² rows, each padded to
-        // HFGI_NQ vec4s, shared::gpu_fold: the same sum, a third of the fetches).
-        uint base = j * uint(HFGI_N2 * HFGI_NQ);
-        for (int k = 0; k < HFGI_NU; ++k) {
-            vec3 acc = vec3(0.0);
-            for (int q = 0; q < HFGI_NQ; ++q) {
-                vec4 a = uintBitsToFloat(texelFetch(hfgi_fold_texels, int(base + uint(k * HFGI_NQ + q))));
-                for (int c = 0; c < 4; ++c) {
-                    if (4 * q + c < HFGI_NE) acc += a[c] * u[4 * q + c];
-                }
-            }
-            hfgi_U[k] += acc;
-        }
+        // eq. 19–21 folded: U += A_j u_j (the stored coefficients; hfgi_fold.glsl: in the legendre
+        // basis only A_j's non-zero entries, shared::gpu_fold).
+        HFGI_FOLD(vec3, hfgi_fold_texels, j * uint(HFGI_FOLD_SIZE), u, hfgi_U, HFGI_NU)
     }
     // Value 3k + c of the receiver's vector is channel c of coefficient k; the receiver stride is
     // 3·HFGI_NU, rounded up to even with f16 (Storage::stride).

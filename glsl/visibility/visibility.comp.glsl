@@ -12,13 +12,13 @@ layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const int HFGI_N = 4;   // SH order n
 layout(constant_id = 1) const int HFGI_NV = 33; // pyramid levels n_v
 layout(constant_id = 2) const int HFGI_NE = 4;  // values per azimuth: n (NLP) or 2n + 1 (legendre moments)
-const int HFGI_NQ = (HFGI_NE + 3) / 4;           // vec4s per row of the fold (shared::gpu_fold)
 // Static modes (frame::shared::static_modes; the push constants' stack_mode, wrap and flags
 // without the dynamic bits): branches on them are compiled out (docs/performance.md §5).
 layout(constant_id = 3) const uint HFGI_STACK = 1u;
 layout(constant_id = 4) const uint HFGI_WRAP = 0u;
 layout(constant_id = 5) const uint HFGI_STATIC_FLAGS = 0u;
 layout(constant_id = 6) const uint HFGI_HALF = 0u; // gi.storage: 1 = f16 (hfgi_store.glsl)
+layout(constant_id = 7) const int HFGI_FOLD_SIZE = 1; // vec4 texels of A_j per azimuth (shared::fold_texels)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 
 // What is read per sample or per azimuth is read through texel views of 32-bit words
@@ -28,7 +28,7 @@ layout(binding = 0) uniform usamplerBuffer hfgi_levels_texels;
 layout(std430, binding = 1) readonly buffer Table { hfgi_Level hfgi_table[]; };
 layout(binding = 2) uniform usamplerBuffer hfgi_stack_texels;
 layout(binding = 3) uniform usamplerBuffer hfgi_samples_texels; // cos φ, sin φ, lo, hi (f32 bits)
-layout(binding = 4) uniform usamplerBuffer hfgi_fold_texels;    // A_j: n² rows of NQ uvec4s (NE floats, zero-padded)
+layout(binding = 4) uniform usamplerBuffer hfgi_fold_texels;    // A_j per azimuth (hfgi_fold.glsl, shared::gpu_fold)
 layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };    // accumulated over azimuth chunks (hfgi_store.glsl)
 layout(binding = 6) uniform usamplerBuffer hfgi_horizons_texels; // sweep: [sample][receiver][2]
 layout(binding = 7) uniform usamplerBuffer hfgi_hplanes_texels;  // the height stack's planes (hfgi_pyramid.glsl)
@@ -37,6 +37,7 @@ layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_elevation.glsl"
 #include "hfgi_near.glsl"
 #include "hfgi_store.glsl"
+#include "hfgi_fold.glsl"
 
 float hfgi_omega[HFGI_NV];
 float hfgi_base[HFGI_NV];
@@ -153,19 +154,9 @@ void main() {
         // eq. 11 within the sample's elevation window (§6), in the NLP or legendre basis.
         float v[HFGI_NE];
         hfgi_elevation(max(wmax, smp.z), smp.w, v);
-        // eq. 20–21 folded: V += A_j v_j. Each row of A_j is padded to HFGI_NQ vec4s
-        // (shared::gpu_fold): a third of the fetches (docs/performance.md §19), the same sum.
-        uint base = (pc.sample_offset + j) * uint(HFGI_N2 * HFGI_NQ);
-        for (int k = 0; k < HFGI_N2; ++k) {
-            float acc = 0.0;
-            for (int q = 0; q < HFGI_NQ; ++q) {
-                vec4 a = uintBitsToFloat(texelFetch(hfgi_fold_texels, int(base + uint(k * HFGI_NQ + q))));
-                for (int c = 0; c < 4; ++c) {
-                    if (4 * q + c < HFGI_NE) acc += a[c] * v[4 * q + c];
-                }
-            }
-            V[k] += acc;
-        }
+        // eq. 20–21 folded: V += A_j v_j (hfgi_fold.glsl: in the legendre basis only A_j's
+        // non-zero entries, shared::gpu_fold; docs/performance.md §19, §22).
+        HFGI_FOLD(float, hfgi_fold_texels, (pc.sample_offset + j) * uint(HFGI_FOLD_SIZE), v, V, HFGI_N2)
     }
     // Receiver stride n², rounded up to even with f16 (Storage::stride); out_offset likewise.
     uint stride = hfgi_stride(HFGI_N2);

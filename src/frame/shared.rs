@@ -78,25 +78,54 @@ pub const VISIBILITY_LOOP_BUDGET: u32 = 40_000;
 /// each member still evaluated the 36 legendre integrals (8 × 36 loop iterations a member).
 pub const INDIRECT_LOOP_BUDGET: u32 = 40_000;
 
-/// The folded wedge matrices `A_j` of `set` as the scan shaders read them: `n²` rows per
-/// azimuth, each of the `e` values acting on the GPU's per-azimuth values
-/// (`math::elevation::gpu_size`: the NLP coefficients, or the legendre basis's Fourier moments)
-/// zero-padded to whole `vec4`s, f32: the shaders read each row through an `R32G32B32A32` view,
-/// a third of the texel fetches of one word at a time (docs/performance.md §19).
+/// The folded wedge matrices `A_j` of `set` as the scan shaders read them, f32, one block per
+/// azimuth, each block zero-padded to whole `vec4`s (the shaders read them through an
+/// `R32G32B32A32` view, docs/performance.md §19). NLP basis: the `n²` rows of `e` values,
+/// each padded to whole `vec4`s. Legendre basis: only the entries that can be non-zero, row by
+/// row, those of [`math::elevation::fold_support`](crate::math::elevation::fold_support) in its
+/// order (`glsl/inc/hfgi_fold.glsl`; the others are zero to rounding: a fifth of the reads and
+/// multiply-adds, docs/performance.md §22).
 pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::scene::model::GiSettings) -> Vec<f32> {
     use crate::math::{azimuth, elevation};
-    let e = elevation::gpu_size(gi.elevation_basis, n);
-    let e4 = e.div_ceil(4) * 4;
-    azimuth::fold(n, set, gi.interpolation, gi.elevation_basis)
+    use crate::scene::model::ElevationBasis;
+    let basis = gi.elevation_basis;
+    let e = elevation::gpu_size(basis, n);
+    azimuth::fold(n, set, gi.interpolation, basis)
         .into_iter()
         .flat_map(|a| {
-            let rows = elevation::fold_to_moments(gi.elevation_basis, n, a).data;
-            debug_assert_eq!(rows.len(), n * n * e);
-            rows.chunks(e)
-                .flat_map(|row| row.iter().map(|&v| v as f32).chain(std::iter::repeat(0.0)).take(e4))
-                .collect::<Vec<_>>()
+            let a = elevation::fold_to_moments(basis, n, a);
+            debug_assert_eq!(a.data.len(), n * n * e);
+            let mut block: Vec<f32> = if basis == ElevationBasis::Legendre {
+                let rows = (0..n).flat_map(|l| (-(l as i64)..=l as i64).map(move |m| (l, m)));
+                rows.enumerate()
+                    .flat_map(|(k, (l, m))| {
+                        let row = &a.data[k * e..(k + 1) * e];
+                        elevation::fold_support(n, l, m).into_iter().map(|c| row[c] as f32).collect::<Vec<_>>()
+                    })
+                    .collect()
+            } else {
+                let e4 = e.div_ceil(4) * 4;
+                a.data
+                    .chunks(e)
+                    .flat_map(|row| row.iter().map(|&v| v as f32).chain(std::iter::repeat(0.0)).take(e4))
+                    .collect()
+            };
+            block.resize(block.len().div_ceil(4) * 4, 0.0);
+            debug_assert_eq!(block.len(), 4 * fold_texels(n, basis) as usize);
+            block
         })
         .collect()
+}
+
+/// The `vec4` texels of one azimuth's block of [`gpu_fold`] (the shaders' `HFGI_FOLD_SIZE`).
+pub fn fold_texels(n: usize, basis: crate::scene::model::ElevationBasis) -> u32 {
+    use crate::math::elevation;
+    let entries = if basis == crate::scene::model::ElevationBasis::Legendre {
+        (0..n as i64).flat_map(|l| (-l..=l).map(move |m| elevation::fold_support(n, l as usize, m).len())).sum()
+    } else {
+        n * n * elevation::gpu_size(basis, n).div_ceil(4) * 4
+    };
+    entries.div_ceil(4) as u32
 }
 
 /// Splits `count` azimuth samples into chunks `(first, count)` of at most `budget / cost`

@@ -181,7 +181,7 @@ impl VisibilityPass {
                         (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
                     ][..],
                     &super::shared::static_modes(3, push.stack_mode, push.wrap, push.flags),
-                    &[(6, storage.spec())],
+                    &[(6, storage.spec()), (7, super::shared::fold_texels(n, scene.gi.elevation_basis))],
                 ]
                 .concat(),
                 1,

@@ -137,6 +137,20 @@ pub fn legendre_interval_fourier(n: usize, table: &[f64], a: f64, b: f64) -> Vec
     (0..n * (n + 1) / 2).map(|e| table[e * row..(e + 1) * row].iter().zip(&f).map(|(t, m)| t * m).sum()).collect()
 }
 
+/// The GPU values (indices into the [`fourier_moments`]: `0` the width, `k` the cosine moment of
+/// order `k`, `n + k` the sine moment) on which row `(l, m)` of a folded wedge matrix in the
+/// legendre basis ([`fold_to_moments`]) is non-zero. The row integrates `g_l|m|(ω) =
+/// cos^{|m|+1}ω · P_l^{(|m|)}(sin ω)` ([`fourier_table`]), a trigonometric polynomial of degree
+/// `l + 1` with the parity of `l − |m|`: even, it has only the cosines of orders `l + 1, l − 1, …
+/// ≥ 0`; odd, only the sines of orders `l + 1, l − 1, … ≥ 1`. Every other entry of the row is zero
+/// to rounding (tested): at order 4 a fold reads 34 of the 144 entries of `A_j`, and the 9 rows
+/// of a diffuse `U` 16 of 81 (docs/performance.md §22). In decreasing order, as
+/// `hfgi_fold_moment` (glsl/inc/hfgi_fold.glsl) reads them.
+pub fn fold_support(n: usize, l: usize, m: i64) -> Vec<usize> {
+    let even = (l as i64 - m.abs()) % 2 == 0;
+    (0..=l + 1).rev().step_by(2).filter(|&k| even || k > 0).map(|k| if even { k } else { n + k }).collect()
+}
+
 /// Values per azimuth on the GPU: `n` NLP coefficients, or for the `legendre` basis the
 /// `2n + 1` [`fourier_moments`] (fewer than the `n(n+1)/2` integrals from order 4 on: 9, 13, 17
 /// against 10, 21, 36 at orders 4, 6, 8).
@@ -223,5 +237,53 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn folded_rows_vanish_outside_their_support() {
+        // fold_support's parity and degree rule against the folded matrices themselves: every
+        // entry it leaves out (the GPU never reads them) is rounding next to the kept ones, for
+        // every order, both wedge interpolations, complete sets and a key light's window.
+        use crate::math::azimuth;
+        use crate::scene::model::{Interpolation, KeyLight};
+        let light = KeyLight { direction: glam::DVec3::new(0.3, -0.5, 0.8), angular_radius: 0.1, radiance: [1.0; 3] };
+        for n in 1..=8usize {
+            for interp in [Interpolation::Linear, Interpolation::Bspline] {
+                for set in [
+                    azimuth::environment_set(32, interp),
+                    azimuth::environment_set(7, interp),
+                    azimuth::key_light_set(&light, 3, interp),
+                ] {
+                    for a in azimuth::fold(n, &set, interp, ElevationBasis::Legendre) {
+                        let a = fold_to_moments(ElevationBasis::Legendre, n, a);
+                        let scale = a.data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                        assert!(scale > 0.0, "n={n}: an empty fold");
+                        let e = 2 * n + 1;
+                        let (mut k, mut kept) = (0, 0);
+                        for l in 0..n {
+                            for m in -(l as i64)..=l as i64 {
+                                let support = fold_support(n, l, m);
+                                kept += support.len();
+                                for (c, v) in a.data[k * e..(k + 1) * e].iter().enumerate() {
+                                    if !support.contains(&c) {
+                                        assert!(
+                                            v.abs() <= 1e-12 * scale,
+                                            "n={n} {interp:?} row ({l}, {m}) column {c}: {v:e} of {scale:e}"
+                                        );
+                                    }
+                                }
+                                k += 1;
+                            }
+                        }
+                        assert_eq!(k, n * n);
+                        assert!(n < 4 || kept * 4 <= n * n * e, "n={n}: {kept} kept");
+                    }
+                }
+            }
+        }
+        assert_eq!(
+            (fold_support(4, 0, 0), fold_support(4, 1, 0), fold_support(4, 1, 1)),
+            (vec![1], vec![6], vec![2, 0])
+        );
     }
 }

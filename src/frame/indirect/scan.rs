@@ -133,6 +133,7 @@ pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: Sc
         (10, u_coefficients(scene) as u32),
         (11, kind.probes as u32),
         (12, kind.replay as u32),
+        (13, crate::frame::shared::fold_texels(n, gi.elevation_basis)),
     ];
     [&own[..], &crate::frame::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }
