@@ -448,6 +448,10 @@ void main() {
     radiance_begin();
     hfgi_unexpose = 1.0 / pc.radiance_scale;
     for (int k = 0; k < HFGI_NU; ++k) hfgi_U[k] = vec3(0.0);
+    // The receiver's own radiance, which the near-field limit casts (radiance level 0 at p): with
+    // the scalar pyramid the same at every azimuth, so read once (the glossy term depends on d).
+    vec3 rad_p = HFGI_VECTOR == 0 && scan.first < 0
+        ? member_radiance(0u, scan.p, 0.0, vec2(1.0, 0.0), HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0) : vec3(0.0);
     for (uint j = pc.sample_offset; j < pc.sample_offset + pc.sample_count; ++j) {
         vec2 d = uintBitsToFloat(texelFetch(hfgi_samples_texels, int(j)).xy);
         // ω_min: the tangent plane of the receiver along φ (§3): the paper's −asin(N·d), or the
@@ -463,7 +467,7 @@ void main() {
         if (scan.first < 0 && hfgi_scan_limit(scan, d, limit) && limit > running + 1e-5) {
             float seg[HFGI_NE];
             hfgi_elevation(running, limit, seg);
-            vec3 rad = member_radiance(0u, scan.p, limit, d, HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0);
+            vec3 rad = HFGI_VECTOR == 0 ? rad_p : member_radiance(0u, scan.p, limit, d, HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0);
             for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
             running = limit;
         }
