@@ -33,6 +33,7 @@ int hfgi_fold_moment(int l, int m, int s) {
 // vec4 texels per azimuth: HFGI_FOLD_SIZE, a specialization constant the including shader
 // declares (frame::shared::fold_texels; a loop here, evaluated per azimuth, cost lavapipe more
 // than the fold it serves).
+
 // acc[k] += (A_j u)_k for the rows k < rows (eq. 19–21 folded): `u` the azimuth's values (type
 // T: float or vec3), A_j's texels from `base` of the R32G32B32A32 view `tex`. The sparse fold's
 // loops have constant bounds after specialization and are unrolled: every entry's texel,
