@@ -96,12 +96,11 @@ pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::sc
             let a = elevation::fold_to_moments(basis, n, a);
             debug_assert_eq!(a.data.len(), n * n * e);
             let mut block: Vec<f32> = if basis == ElevationBasis::Legendre {
-                let rows = (0..n).flat_map(|l| (-(l as i64)..=l as i64).map(move |m| (l, m)));
-                rows.enumerate()
-                    .flat_map(|(k, (l, m))| {
-                        let row = &a.data[k * e..(k + 1) * e];
-                        elevation::fold_support(n, l, m).into_iter().map(|c| row[c] as f32).collect::<Vec<_>>()
-                    })
+                let supports = elevation::fold_supports(n);
+                a.data
+                    .chunks(e)
+                    .zip(&supports)
+                    .flat_map(|(row, support)| support.iter().map(|&c| row[c] as f32))
                     .collect()
             } else {
                 let e4 = e.div_ceil(4) * 4;
@@ -121,7 +120,7 @@ pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::sc
 pub fn fold_texels(n: usize, basis: crate::scene::model::ElevationBasis) -> u32 {
     use crate::math::elevation;
     let entries = if basis == crate::scene::model::ElevationBasis::Legendre {
-        (0..n as i64).flat_map(|l| (-l..=l).map(move |m| elevation::fold_support(n, l as usize, m).len())).sum()
+        elevation::fold_supports(n).iter().map(Vec::len).sum()
     } else {
         n * n * elevation::gpu_size(basis, n).div_ceil(4) * 4
     };

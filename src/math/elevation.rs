@@ -151,6 +151,12 @@ pub fn fold_support(n: usize, l: usize, m: i64) -> Vec<usize> {
     (0..=l + 1).rev().step_by(2).filter(|&k| even || k > 0).map(|k| if even { k } else { n + k }).collect()
 }
 
+/// [`fold_support`] of every row of an order-`n` fold, in SH order (row `k = l(l+1) + m`): what
+/// `frame::shared::gpu_fold` stores of each row and `fold_texels` counts.
+pub fn fold_supports(n: usize) -> Vec<Vec<usize>> {
+    (0..n).flat_map(|l| (-(l as i64)..=l as i64).map(move |m| fold_support(n, l, m))).collect()
+}
+
 /// Values per azimuth on the GPU: `n` NLP coefficients, or for the `legendre` basis the
 /// `2n + 1` [`fourier_moments`] (fewer than the `n(n+1)/2` integrals from order 4 on: 9, 13, 17
 /// against 10, 21, 36 at orders 4, 6, 8).
@@ -259,23 +265,19 @@ mod tests {
                         let scale = a.data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                         assert!(scale > 0.0, "n={n}: an empty fold");
                         let e = 2 * n + 1;
-                        let (mut k, mut kept) = (0, 0);
-                        for l in 0..n {
-                            for m in -(l as i64)..=l as i64 {
-                                let support = fold_support(n, l, m);
-                                kept += support.len();
-                                for (c, v) in a.data[k * e..(k + 1) * e].iter().enumerate() {
-                                    if !support.contains(&c) {
-                                        assert!(
-                                            v.abs() <= 1e-12 * scale,
-                                            "n={n} {interp:?} row ({l}, {m}) column {c}: {v:e} of {scale:e}"
-                                        );
-                                    }
+                        let supports = fold_supports(n);
+                        assert_eq!(supports.len(), n * n);
+                        for (k, (row, support)) in a.data.chunks(e).zip(&supports).enumerate() {
+                            for (c, v) in row.iter().enumerate() {
+                                if !support.contains(&c) {
+                                    assert!(
+                                        v.abs() <= 1e-12 * scale,
+                                        "n={n} {interp:?} row {k} column {c}: {v:e} of {scale:e}"
+                                    );
                                 }
-                                k += 1;
                             }
                         }
-                        assert_eq!(k, n * n);
+                        let kept: usize = supports.iter().map(Vec::len).sum();
                         assert!(n < 4 || kept * 4 <= n * n * e, "n={n}: {kept} kept");
                     }
                 }
