@@ -90,13 +90,13 @@ pub fn gpu_fold(n: usize, set: &crate::math::azimuth::AzimuthSet, gi: &crate::sc
     use crate::scene::model::ElevationBasis;
     let basis = gi.elevation_basis;
     let e = elevation::gpu_size(basis, n);
+    let supports = elevation::fold_supports(n); // the same rows at every azimuth
     azimuth::fold(n, set, gi.interpolation, basis)
         .into_iter()
         .flat_map(|a| {
             let a = elevation::fold_to_moments(basis, n, a);
             debug_assert_eq!(a.data.len(), n * n * e);
             let mut block: Vec<f32> = if basis == ElevationBasis::Legendre {
-                let supports = elevation::fold_supports(n);
                 a.data
                     .chunks(e)
                     .zip(&supports)
