@@ -1,0 +1,259 @@
+//! How long the first bounce's indirect walks are, how much of them a bound on the heights
+//! could skip, and how busy the lanes are (docs/performance.md §24). A diagnostic of the f64
+//! twin's walk (no GPU; seconds at 128²):
+//!
+//!     cargo run --release --example walk_stats -- scenes/hard/spikes.toml [--bounds] [KEY=VALUE ...]
+//!
+//! For every receiver and each of the scene's first-bounce azimuths it walks the ladder with its
+//! radial probes as `glsl/indirect/scan.comp.glsl` does (the twin's heights, ω_min and near-field
+//! limit; the probed walk and the probe-less walk whose members the replay records) and counts
+//! the positions (probes and samples) on the ray, those read before the GPU's early stop — the
+//! field's largest height against the probe-less horizon —, before a tighter stop (the largest
+//! height of the half-plane ahead of the position), and up to the last member of either walk (an
+//! oracle: no conservative stop can end sooner). With `--bounds` the per-ray figures are taken
+//! on every fourth receiver in x and y, with one more stop: the largest height of the cone ahead
+//! that holds every texel a later read reaches through the stack's filters (sized for `k = 4`,
+//! `o = 6`; no wrap). Then the lane occupancy — the lanes' work over the work of every lane
+//! running as long as its group's busiest — of the 4 × 2 blocks of `hfgi_receiver` (lavapipe's
+//! SIMD lanes) and of four other assignments of rays to lanes.
+use std::f64::consts::PI;
+use std::io::Write;
+use std::path::Path;
+
+use hfgi::reference::direct::{scan_level, Scan};
+use hfgi::reference::indirect::receiver_normal;
+use hfgi::reference::pyramid::CpuPyramid;
+use hfgi::scene::file::load_scene;
+use hfgi::scene::model::Scene;
+
+/// One ray: positions on it (to its end), read before the early stop, the half-plane stop and
+/// the cone stop, up to its last member; the members of the probed walk.
+#[derive(Default, Clone, Copy)]
+struct Ray {
+    all: u32,
+    global: u32,
+    half: u32,
+    cone: u32,
+    oracle: u32,
+    members: u32,
+}
+
+/// The largest level-0 height ahead of a position along one azimuth: of the half-plane
+/// `s ≥ s₀`, and of the cone from the receiver (`|o| ≤ 0.39 s + 1.5`, `s ≥ 0.77 t − 1`), which
+/// holds every texel a read at `t' ≥ t` reaches through the stack's filters (B-spline ±2 texels
+/// of level `L` plus the bilinear decimation chain, ≤ 0.23 t' + 1 texels at `k = 4`, `o = 6`).
+struct Ahead {
+    half: Vec<f64>,
+    smin: f64,
+    cone: Vec<(f64, f64)>,
+}
+
+impl Ahead {
+    fn new(l0: &[f64], w: usize, h: usize, d: [f64; 2], p: Option<[f64; 2]>) -> Self {
+        let smin = -((w + h) as f64);
+        let mut half = vec![f64::MIN; 4 * (w + h) + 4];
+        let mut cone = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let v = l0[y * w + x];
+                let b = ((x as f64 * d[0] + y as f64 * d[1] - smin) * 2.0) as usize;
+                half[b] = half[b].max(v);
+                if let Some(p) = p {
+                    let (ex, ey) = (x as f64 - p[0], y as f64 - p[1]);
+                    let (s, o) = (ex * d[0] + ey * d[1], (ey * d[0] - ex * d[1]).abs());
+                    if s >= -2.0 && o <= 0.39 * s.max(0.0) + 1.5 {
+                        cone.push((s, v));
+                    }
+                }
+            }
+        }
+        for b in (0..half.len() - 1).rev() {
+            half[b] = half[b].max(half[b + 1]);
+        }
+        cone.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for k in (0..cone.len().saturating_sub(1)).rev() {
+            cone[k].1 = cone[k].1.max(cone[k + 1].1);
+        }
+        Self { half, smin, cone }
+    }
+
+    fn half_from(&self, s: f64) -> f64 {
+        let b = ((s - self.smin) * 2.0).floor().max(0.0) as usize;
+        self.half.get(b).copied().unwrap_or(f64::MIN)
+    }
+
+    fn cone_from(&self, t: f64) -> f64 {
+        let k = self.cone.partition_point(|e| e.0 < 0.77 * t - 1.0);
+        self.cone.get(k).map_or(f64::MIN, |e| e.1)
+    }
+}
+
+/// The walk of receiver `p` along azimuth `phi` (see the file's comment).
+fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gmax: f64, ahead: &Ahead) -> Ray {
+    let gi = &scene.gi;
+    let texel = scene.texel_size;
+    let n_v = pyr.layout.count();
+    let d = [phi.cos(), phi.sin()];
+    let nrm = receiver_normal(scene, p);
+    let mut running = (-(nrm[0] * d[0] + nrm[1] * d[1])).atan2(nrm[2]);
+    if let Some(limit) = scan.limit(p, phi).filter(|l| *l > running + 1e-5) {
+        running = limit;
+    }
+    let bmin = (0..n_v).map(|l| pyr.height_at(l, p[0], p[1])).fold(f64::MAX, f64::min);
+    let (mut walk, mut plain) = (running.tan(), running.tan());
+    let sp = p[0] * d[0] + p[1] * d[1];
+    let mut ray = Ray::default();
+    let (mut pos, mut stops) = (0u32, [None::<u32>; 3]);
+    let mut visit = |tp: f64, q: [f64; 2], level: usize, probe: bool| {
+        let reach = plain * tp * texel;
+        let bounds = [gmax, ahead.half_from(sp + 0.77 * tp - 1.0), ahead.cone_from(tp)];
+        for (stop, bound) in stops.iter_mut().zip(bounds) {
+            if stop.is_none() && bound - bmin <= reach {
+                *stop = Some(pos);
+            }
+        }
+        let dh = pyr.height_at(level, q[0], q[1]) - pyr.height_at(level, p[0], p[1]);
+        pos += 1;
+        if dh > walk * tp * texel {
+            walk = dh / (tp * texel);
+            ray.oracle = pos;
+            ray.members += 1;
+        }
+        if !probe && dh > plain * tp * texel {
+            plain = dh / (tp * texel);
+            ray.oracle = pos;
+        }
+    };
+    let mut t_prev = 0.0;
+    for (idx, q, _) in scan.samples(p, phi) {
+        let t = scan.step(idx);
+        let level = scan_level(idx as i64 - gi.near_steps as i64, gi.level_step, gi.level_offset, n_v);
+        let np = ((t - t_prev).ceil() as i64 - 1).clamp(0, gi.radial_probes as i64);
+        for s in 1..=np {
+            let tp = t_prev + (t - t_prev) * s as f64 / (np + 1) as f64;
+            visit(tp, [p[0] + tp * d[0], p[1] + tp * d[1]], 0, true);
+        }
+        t_prev = t;
+        visit(t, q, level, false);
+    }
+    ray.all = pos;
+    let [g, hp, c] = stops.map(|s| s.unwrap_or(pos));
+    (ray.global, ray.half, ray.cone) = (g, hp.max(ray.oracle), c.max(ray.oracle));
+    ray
+}
+
+/// Rays by azimuth, 4 × 2 block and lane.
+type Rays = Vec<Vec<Vec<Ray>>>;
+
+/// Every ray of the scene's first-bounce azimuths, as `[azimuth][4 × 2 block][lane]`, and the
+/// per-ray means of `Ray`'s counts (with `bounds`, over every fourth receiver in x and y).
+fn walk_all(scene: &Scene, bounds: bool) -> Result<(Rays, [f64; 6]), Box<dyn std::error::Error>> {
+    let gi = &scene.gi;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let z0 = hfgi::rules::scene::height_origin(&scene.field);
+    let pyr = CpuPyramid::build_relative(&scene.field, z0, (w, h), gi.level_step, scene.wrap, true)?;
+    let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
+    let l0 = &pyr.levels[0];
+    let gmax = l0.iter().copied().fold(f64::MIN, f64::max);
+    let m = gi.azimuths as usize;
+    let (mut sum, mut rays) = ([0f64; 6], 0f64);
+    let mut per = Vec::new();
+    for j in 0..m {
+        let phi = 2.0 * PI * j as f64 / m as f64;
+        let d = [phi.cos(), phi.sin()];
+        let plane = Ahead::new(l0, w, h, d, None);
+        let mut blocks = Vec::new();
+        for (gx, gy) in (0..h.div_ceil(2)).flat_map(|y| (0..w.div_ceil(4)).map(move |x| (x, y))) {
+            let mut block = Vec::new();
+            for (x, y) in (0..8).map(|l| (gx * 4 + l % 4, gy * 2 + l / 4)).filter(|&(x, y)| x < w && y < h) {
+                let p = [x as f64, y as f64];
+                let sub = bounds && x % 4 == 0 && y % 4 == 0;
+                let cone = sub.then(|| Ahead::new(l0, w, h, d, Some(p)));
+                let ray = walk(scene, &scan, &pyr, p, phi, gmax, cone.as_ref().unwrap_or(&plane));
+                block.push(ray);
+                if !bounds || sub {
+                    let r = [ray.all, ray.global, ray.half, ray.cone, ray.oracle, ray.members];
+                    sum.iter_mut().zip(r).for_each(|(s, v)| *s += v as f64);
+                    rays += 1.0;
+                }
+            }
+            blocks.push(block);
+        }
+        per.push(blocks);
+    }
+    Ok((per, sum.map(|s| s / rays)))
+}
+
+/// Lane occupancy of SIMD groups (each a list of the lanes' work: positions, members): the
+/// work done over the work of every lane running as long as the group's longest.
+fn occupancy(groups: impl Iterator<Item = Vec<[u32; 2]>>) -> String {
+    let (mut done, mut held) = ([0f64; 2], [0f64; 2]);
+    for g in groups {
+        for k in 0..2 {
+            done[k] += g.iter().map(|w| w[k]).sum::<u32>() as f64;
+            held[k] += g.iter().map(|w| w[k]).max().unwrap_or(0) as f64 * g.len() as f64;
+        }
+    }
+    format!("positions {:.0}%, members {:.0}%", 100.0 * done[0] / held[0], 100.0 * done[1] / held[1])
+}
+
+/// The lane occupancy of the shipped assignment and of three others (see the file's comment).
+fn report_lanes(out: &mut impl Write, per: &[Vec<Vec<Ray>>]) -> std::io::Result<()> {
+    let m = per.len();
+    let work = |r: &Ray| [r.global, r.members];
+    let blocks = per[0].len();
+    let lanes = |b: usize| per[0][b].len();
+    writeln!(out, "  lane occupancy (work done / work of lanes kept waiting):")?;
+    let shipped = per.iter().flat_map(|js| js.iter().map(|b| b.iter().map(work).collect()));
+    writeln!(out, "    4 × 2 blocks, one ray each (shipped): {}", occupancy(shipped))?;
+    let pairs = (0..m / 2).flat_map(|j| {
+        (0..blocks).map(move |b| {
+            (0..lanes(b))
+                .map(|l| [per[j][b][l], per[j + m / 2][b][l]])
+                .map(|[a, c]| [a.global + c.global, a.members + c.members])
+                .collect()
+        })
+    });
+    writeln!(out, "    4 × 2 blocks, the rays of φ and φ + π one after the other: {}", occupancy(pairs))?;
+    let quads = (0..m / 4).flat_map(|j| {
+        (0..blocks).map(move |b| {
+            (0..lanes(b))
+                .map(|l| {
+                    (0..4).map(|k| work(&per[j + k * m / 4][b][l])).fold([0, 0], |a, w| [a[0] + w[0], a[1] + w[1]])
+                })
+                .collect()
+        })
+    });
+    writeln!(out, "    4 × 2 blocks, the rays of φ + kπ/2 one after the other: {}", occupancy(quads))?;
+    let octets = (0..blocks).flat_map(|b| {
+        (0..lanes(b)).flat_map(move |l| (0..m / 8).map(move |o| (0..8).map(|k| work(&per[8 * o + k][b][l])).collect()))
+    });
+    writeln!(out, "    one receiver, 8 neighbouring azimuths: {}", occupancy(octets))?;
+    let mut keys: Vec<(u32, usize, usize)> = (0..blocks)
+        .flat_map(|b| (0..lanes(b)).map(move |l| ((0..m).map(|j| per[j][b][l].members).sum(), b, l)))
+        .collect();
+    keys.sort_unstable();
+    let sorted =
+        keys.chunks(8).flat_map(|c| (0..m).map(move |j| c.iter().map(|&(_, b, l)| work(&per[j][b][l])).collect()));
+    writeln!(out, "    8 receivers of similar total members (sorted): {}", occupancy(sorted))?;
+    Ok(())
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let path = args.get(1).ok_or("usage: walk_stats SCENE [--bounds] [KEY=VALUE ...]")?;
+    let bounds = args.iter().any(|a| a == "--bounds");
+    let sets: Vec<String> = args[2..].iter().filter(|a| a.contains('=')).cloned().collect();
+    let scene = load_scene(Path::new(path), &sets)?;
+    let (per, [all, g, hp, c, o, mem]) = walk_all(&scene, bounds)?;
+    let mut out = std::io::stdout().lock();
+    let (w, h) = (scene.field.width(), scene.field.height());
+    writeln!(out, "{path} ({w}×{h}, {} azimuths): positions (probes and samples) read per ray:", per.len())?;
+    writeln!(out, "  to the ray's end {all:.1}; before the early stop {g:.1}; the half-plane stop {hp:.1}")?;
+    if bounds {
+        writeln!(out, "  the cone stop {c:.1} (every fourth receiver in x and y)")?;
+    }
+    writeln!(out, "  up to the last member (oracle) {o:.1}; members of the probed walk per ray {mem:.2}")?;
+    report_lanes(&mut out, &per)?;
+    Ok(())
+}
