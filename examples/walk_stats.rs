@@ -99,7 +99,9 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
     if let Some(limit) = scan.limit(p, phi).filter(|l| *l > running + 1e-5) {
         running = limit;
     }
-    let bmin = (0..n_v).map(|l| pyr.height_at(l, p[0], p[1])).fold(f64::MAX, f64::min);
+    // The lowest base a sample is compared with: of the levels the ladder reads (hfgi_scan_levels).
+    let top = scan_level((n_v + gi.far_steps() as usize) as i64 - 1, gi.level_step, gi.level_offset, n_v);
+    let bmin = (0..=top).map(|l| pyr.height_at(l, p[0], p[1])).fold(f64::MAX, f64::min);
     let (mut walk, mut plain) = (running.tan(), running.tan());
     let sp = p[0] * d[0] + p[1] * d[1];
     let mut ray = Ray::default();
