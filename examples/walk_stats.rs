@@ -21,10 +21,10 @@ use std::io::Write;
 use std::path::Path;
 
 use hfgi::reference::direct::{scan_level, Scan};
-use hfgi::reference::indirect::receiver_normal;
+use hfgi::reference::indirect::{omega_min, probe_steps, receiver_normal};
 use hfgi::reference::pyramid::CpuPyramid;
 use hfgi::scene::file::load_scene;
-use hfgi::scene::model::Scene;
+use hfgi::scene::model::{OmegaMin, Scene};
 
 /// One ray: positions on it (to its end), read before the early stop, the half-plane stop and
 /// the cone stop, up to its last member; the members of the probed walk.
@@ -94,14 +94,16 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
     let texel = scene.texel_size;
     let n_v = pyr.layout.count();
     let d = [phi.cos(), phi.sin()];
-    let nrm = receiver_normal(scene, p);
-    let mut running = (-(nrm[0] * d[0] + nrm[1] * d[1])).atan2(nrm[2]);
+    let tangent = gi.omega_min == OmegaMin::Tangent;
+    let mut running = omega_min(receiver_normal(scene, p), phi, tangent);
     if let Some(limit) = scan.limit(p, phi).filter(|l| *l > running + 1e-5) {
         running = limit;
     }
-    // The lowest base a sample is compared with: of the levels the ladder reads (hfgi_scan_levels).
+    // The receiver's height at each level, which samples of that level are compared with, and
+    // the lowest of the levels the ladder reads (hfgi_scan_levels).
+    let base: Vec<f64> = (0..n_v).map(|l| pyr.height_at(l, p[0], p[1])).collect();
     let top = scan_level((n_v + gi.far_steps() as usize) as i64 - 1, gi.level_step, gi.level_offset, n_v);
-    let bmin = (0..=top).map(|l| pyr.height_at(l, p[0], p[1])).fold(f64::MAX, f64::min);
+    let bmin = base[..=top].iter().copied().fold(f64::MAX, f64::min);
     let (mut walk, mut plain) = (running.tan(), running.tan());
     let sp = p[0] * d[0] + p[1] * d[1];
     let mut ray = Ray::default();
@@ -114,7 +116,7 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
                 *stop = Some(pos);
             }
         }
-        let dh = pyr.height_at(level, q[0], q[1]) - pyr.height_at(level, p[0], p[1]);
+        let dh = pyr.height_at(level, q[0], q[1]) - base[level];
         pos += 1;
         if dh > walk * tp * texel {
             walk = dh / (tp * texel);
@@ -130,9 +132,7 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
     for (idx, q, _) in scan.samples(p, phi) {
         let t = scan.step(idx);
         let level = scan_level(idx as i64 - gi.near_steps as i64, gi.level_step, gi.level_offset, n_v);
-        let np = ((t - t_prev).ceil() as i64 - 1).clamp(0, gi.radial_probes as i64);
-        for s in 1..=np {
-            let tp = t_prev + (t - t_prev) * s as f64 / (np + 1) as f64;
+        for tp in probe_steps(t_prev, t, scan.probes) {
             visit(tp, [p[0] + tp * d[0], p[1] + tp * d[1]], 0, true);
         }
         t_prev = t;
@@ -208,25 +208,20 @@ fn report_lanes(out: &mut impl Write, per: &[Vec<Vec<Ray>>]) -> std::io::Result<
     writeln!(out, "  lane occupancy (work done / work of lanes kept waiting):")?;
     let shipped = per.iter().flat_map(|js| js.iter().map(|b| b.iter().map(work).collect()));
     writeln!(out, "    4 × 2 blocks, one ray each (shipped): {}", occupancy(shipped))?;
-    let pairs = (0..m / 2).flat_map(|j| {
-        (0..blocks).map(move |b| {
-            (0..lanes(b))
-                .map(|l| [per[j][b][l], per[j + m / 2][b][l]])
-                .map(|[a, c]| [a.global + c.global, a.members + c.members])
-                .collect()
+    // Each lane runs the rays of φ_j + k·2π/r, k < r, one after the other.
+    let back_to_back = |r: usize| {
+        (0..m / r).flat_map(move |j| {
+            (0..blocks).map(move |b| {
+                (0..lanes(b))
+                    .map(|l| {
+                        (0..r).map(|k| work(&per[j + k * m / r][b][l])).fold([0, 0], |a, w| [a[0] + w[0], a[1] + w[1]])
+                    })
+                    .collect()
+            })
         })
-    });
-    writeln!(out, "    4 × 2 blocks, the rays of φ and φ + π one after the other: {}", occupancy(pairs))?;
-    let quads = (0..m / 4).flat_map(|j| {
-        (0..blocks).map(move |b| {
-            (0..lanes(b))
-                .map(|l| {
-                    (0..4).map(|k| work(&per[j + k * m / 4][b][l])).fold([0, 0], |a, w| [a[0] + w[0], a[1] + w[1]])
-                })
-                .collect()
-        })
-    });
-    writeln!(out, "    4 × 2 blocks, the rays of φ + kπ/2 one after the other: {}", occupancy(quads))?;
+    };
+    writeln!(out, "    4 × 2 blocks, the rays of φ and φ + π one after the other: {}", occupancy(back_to_back(2)))?;
+    writeln!(out, "    4 × 2 blocks, the rays of φ + kπ/2 one after the other: {}", occupancy(back_to_back(4)))?;
     let octets = (0..blocks).flat_map(|b| {
         (0..lanes(b)).flat_map(move |l| (0..m / 8).map(move |o| (0..8).map(|k| work(&per[8 * o + k][b][l])).collect()))
     });

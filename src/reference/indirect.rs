@@ -75,10 +75,7 @@ pub fn scan_radiance(
     radiance: &mut dyn FnMut(usize, [f64; 2], f64) -> [f64; 3],
 ) -> [Vec<f64>; 3] {
     let (dx, dy) = (phi.cos(), phi.sin());
-    // ω_min: the receiver's tangent plane along φ (§3): −asin(N·d), or the exact tangent
-    // elevation atan2(−N·d, N_z) (CONVENTIONS.md, docs/accuracy.md §4).
-    let nd = normal[0] * dx + normal[1] * dy;
-    let omega_min = if tangent { (-nd).atan2(normal[2]) } else { -nd.clamp(-1.0, 1.0).asin() };
+    let omega_min = omega_min(normal, phi, tangent);
     let e = elevation::size(scan.basis, n);
     let mut u = [vec![0.0; e], vec![0.0; e], vec![0.0; e]];
     let mut running = omega_min;
@@ -111,13 +108,10 @@ pub fn scan_radiance(
     };
     let mut t_prev = 0.0;
     for (i, q, omega) in scan.samples(p, phi) {
-        // Radial probes (docs/accuracy.md §4): level-0 samples evenly between this sample and
-        // the previous one when they are more than a texel apart, read with this sample's
-        // radiance level. (The GPU skips those its max-pyramid bound rules out: the same members.)
+        // Radial probes, read with this sample's radiance level. (The GPU skips those its
+        // max-pyramid bound rules out: the same members.)
         let t = scan.step(i);
-        let np = ((t - t_prev).ceil() as i64 - 1).clamp(0, scan.probes as i64);
-        for s in 1..=np {
-            let tp = t_prev + (t - t_prev) * s as f64 / (np + 1) as f64;
+        for tp in probe_steps(t_prev, t, scan.probes) {
             let qp = [p[0] + tp * dx, p[1] + tp * dy];
             cast(i, qp, scan.probe(p, qp, tp), &mut running);
         }
@@ -125,6 +119,26 @@ pub fn scan_radiance(
         cast(i, q, omega, &mut running);
     }
     u
+}
+
+/// ω_min of a receiver with normal `normal` along azimuth `phi`: its tangent plane (§3), the
+/// paper's `−asin(N·d)` or, with `tangent`, the exact tangent elevation `atan2(−N·d, N_z)`
+/// (CONVENTIONS.md, docs/accuracy.md §4).
+pub fn omega_min(normal: [f64; 3], phi: f64, tangent: bool) -> f64 {
+    let nd = normal[0] * phi.cos() + normal[1] * phi.sin();
+    if tangent {
+        (-nd).atan2(normal[2])
+    } else {
+        -nd.clamp(-1.0, 1.0).asin()
+    }
+}
+
+/// The radial probes between ladder steps `t_prev` and `t` (texels; docs/accuracy.md §4): when
+/// they are more than a texel apart, `n_p = clamp(⌈t − t_prev⌉ − 1, 0, probes)` level-0 samples
+/// evenly between them, in order.
+pub fn probe_steps(t_prev: f64, t: f64, probes: usize) -> impl Iterator<Item = f64> {
+    let np = ((t - t_prev).ceil() as i64 - 1).clamp(0, probes as i64);
+    (1..=np).map(move |s| t_prev + (t - t_prev) * s as f64 / (np + 1) as f64)
 }
 
 /// The radiance pyramids of one bounce (docs/indirect.md §1): `channels[0..3]` the RGB exit
