@@ -6,6 +6,13 @@
 #define HFGI_ELEVATION_GLSL
 #include "hfgi_nlp.glsl"
 
+// The highest Fourier order the includer needs (HFGI_KMAX ≤ n; row (l, m) of a fold reads
+// orders ≤ l + 1, so a vector kept to bands < b needs b): the moments above it stay 0 and
+// hfgi_add_moments leaves them out. Default: every order.
+#ifndef HFGI_KMAX
+#define HFGI_KMAX HFGI_N
+#endif
+
 // sin x and cos x for |x| ≤ π/2 (elevations, their half-differences and midpoints), by their
 // Taylor series to x¹¹ and x¹² in Horner form: the first omitted terms are below 6e-8 and 7e-9
 // at π/2, under f32's spacing at 1 (1.2e-7), and sin keeps its relative precision as x → 0.
@@ -47,7 +54,7 @@ void hfgi_fourier_moments(float a, float b, out float e[HFGI_NE]) {
     float sm1 = hfgi_sin_elevation(mu), cm1 = hfgi_cos_elevation(mu);
     float shk = sh1, chk = ch1, smk = sm1, cmk = cm1; // k = 1
     e[0] = d;
-    for (int k = 1; k <= HFGI_N; ++k) {
+    for (int k = 1; k <= HFGI_KMAX; ++k) {
         float w = 2.0 / float(k) * shk;
         e[k] = w * cmk;
         e[HFGI_N + k] = w * smk;
@@ -59,6 +66,16 @@ void hfgi_fourier_moments(float a, float b, out float e[HFGI_NE]) {
         cmk = c3;
     }
 }
+
+// acc += w · e for the values a fold up to order HFGI_KMAX reads: every value in the NLP basis;
+// in the legendre basis the width and the cosines and sines of orders 1..HFGI_KMAX.
+#define HFGI_ADD_MOMENTS(acc, w, e)                                                           \
+    if (HFGI_NE == HFGI_N) {                                                                  \
+        for (int hfgi_i = 0; hfgi_i < HFGI_NE; ++hfgi_i) acc[hfgi_i] += (w) * e[hfgi_i];      \
+    } else {                                                                                  \
+        for (int hfgi_i = 0; hfgi_i <= HFGI_KMAX; ++hfgi_i) acc[hfgi_i] += (w) * e[hfgi_i];   \
+        for (int hfgi_i = 1; hfgi_i <= HFGI_KMAX; ++hfgi_i) acc[HFGI_N + hfgi_i] += (w) * e[HFGI_N + hfgi_i]; \
+    }
 
 // The basis vector of the indicator of elevations [a, b] (zero if b <= a).
 void hfgi_elevation(float a, float b, out float e[HFGI_NE]) {

@@ -48,6 +48,7 @@ const uint HFGI_FLAG_SWEEP = 32u; // visibility: ω_max from the line sweep's ho
 // set_raw_plane0): with HFGI_FLAG_RAW_LEVEL0, level 0 is read through the stack like every other
 // level, one read path per sample (docs/performance.md §17).
 const uint HFGI_FLAG_RAW_PLANE0 = 64u;
+const uint HFGI_FLAG_TANGENT_CLIP = 256u; // visibility: the window starts no lower than the tangent elevation
 const uint HFGI_FLAG_RAW_RPLANE0 = 128u;
 // Flags that change between the dispatches of one pipeline (frame::shared::DYNAMIC_FLAGS). The
 // others, and the storage mode and wrap, are fixed at pipeline creation: the scanning shaders
@@ -186,6 +187,31 @@ bool hfgi_scan_sample(hfgi_Scan s, int i, float t, int n_v, vec2 d, float base, 
     bool ok = hfgi_scan_slope(s, i, t, n_v, d, base, q, omega);
     omega = atan(omega);
     return ok;
+}
+
+// CONVENTIONS.md height gradient at texel t of level 0 (one-sided at the border, periodic with
+// wrap), per unit of `texel` (the texel size). Twin: reference::direct::receiver_normal.
+vec2 hfgi_gradient(ivec2 t, bool wrap, float texel) {
+    hfgi_Level l0 = hfgi_table[0];
+    int w = int(l0.width), h = int(l0.height);
+    t = ivec2(hfgi_address(t.x, w, wrap), hfgi_address(t.y, h, wrap));
+    ivec2 a = wrap ? t - 1 : max(t - 1, ivec2(0));
+    ivec2 b = wrap ? t + 1 : min(t + 1, ivec2(w - 1, h - 1));
+    float hx = hfgi_fetch(l0, ivec2(b.x, t.y), wrap) - hfgi_fetch(l0, ivec2(a.x, t.y), wrap);
+    float hy = hfgi_fetch(l0, ivec2(t.x, b.y), wrap) - hfgi_fetch(l0, ivec2(t.x, a.y), wrap);
+    return vec2(hx / (float(b.x - a.x) * texel), hy / (float(b.y - a.y) * texel));
+}
+
+// Normal at level-0 position q: the gradients of the four surrounding texels, bilinear, then
+// normalised (docs/indirect.md §2; a receiver's — the indirect scan's ω_min, the visibility's
+// tangent clip — and, in vector mode, a casting point's).
+vec3 hfgi_normal_at(vec2 q, bool wrap, float texel) {
+    vec2 fl = floor(q);
+    vec2 f = q - fl;
+    ivec2 b = ivec2(fl);
+    vec2 g = (1.0 - f.x) * (1.0 - f.y) * hfgi_gradient(b, wrap, texel) + f.x * (1.0 - f.y) * hfgi_gradient(b + ivec2(1, 0), wrap, texel)
+           + (1.0 - f.x) * f.y * hfgi_gradient(b + ivec2(0, 1), wrap, texel) + f.x * f.y * hfgi_gradient(b + ivec2(1, 1), wrap, texel);
+    return normalize(vec3(-g, 1.0));
 }
 
 #endif

@@ -80,6 +80,11 @@ float hfgi_unexpose;
 // hfgi_pyramid.glsl's stack reads are the height stack's (hfgi_stack, its planes hfgi_hplanes):
 // the radiance stack has its own planes (binding 12), and radiance_rgb reads them itself.
 #include "hfgi_pyramid.glsl"
+// U keeps bands < √HFGI_NU (rules::scene::u_bands), whose fold rows read Fourier orders up
+// to √HFGI_NU: the casts compute and accumulate no higher ones.
+const int hfgi_u_bands = HFGI_NU >= 64 ? 8 : HFGI_NU >= 49 ? 7 : HFGI_NU >= 36 ? 6 : HFGI_NU >= 25 ? 5
+                       : HFGI_NU >= 16 ? 4 : HFGI_NU >= 9 ? 3 : HFGI_NU >= 4 ? 2 : 1;
+#define HFGI_KMAX (hfgi_u_bands < HFGI_N ? hfgi_u_bands : HFGI_N)
 #include "hfgi_elevation.glsl"
 #include "hfgi_sh.glsl"
 #include "hfgi_max.glsl"
@@ -114,30 +119,6 @@ void radiance_begin() {
 // top (hfgi_max.glsl), once per receiver, for the early stop.
 float max_begin(uvec2 n0) {
     return hfgi_max(hfgi_max_offset(n0, hfgi_max_count(n0) - 1u));
-}
-
-// CONVENTIONS.md height gradient at texel (i, j) of level 0 (one-sided at the border, periodic
-// with wrap).
-vec2 gradient(ivec2 t, bool wrap) {
-    hfgi_Level l0 = hfgi_table[0];
-    int w = int(l0.width), h = int(l0.height);
-    t = ivec2(hfgi_address(t.x, w, wrap), hfgi_address(t.y, h, wrap));
-    ivec2 a = wrap ? t - 1 : max(t - 1, ivec2(0));
-    ivec2 b = wrap ? t + 1 : min(t + 1, ivec2(w - 1, h - 1));
-    float hx = hfgi_fetch(l0, ivec2(b.x, t.y), wrap) - hfgi_fetch(l0, ivec2(a.x, t.y), wrap);
-    float hy = hfgi_fetch(l0, ivec2(t.x, b.y), wrap) - hfgi_fetch(l0, ivec2(t.x, a.y), wrap);
-    return vec2(hx / (float(b.x - a.x) * pc.texel_size), hy / (float(b.y - a.y) * pc.texel_size));
-}
-
-// Normal at level-0 position q: the gradients of the four surrounding texels, bilinear, then
-// normalised (docs/indirect.md §2; the receiver's and, in vector mode, a casting point's).
-vec3 normal_at(vec2 q, bool wrap) {
-    vec2 fl = floor(q);
-    vec2 f = q - fl;
-    ivec2 b = ivec2(fl);
-    vec2 g = (1.0 - f.x) * (1.0 - f.y) * gradient(b, wrap) + f.x * (1.0 - f.y) * gradient(b + ivec2(1, 0), wrap)
-           + (1.0 - f.x) * f.y * gradient(b + ivec2(0, 1), wrap) + f.x * f.y * gradient(b + ivec2(1, 1), wrap);
-    return normalize(vec3(-g, 1.0));
 }
 
 // The RGB radiance of level lv at level-0 position q: the three channels' planes share their
@@ -194,7 +175,7 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, bool stack_mode, bool
     uint n_u = pc.radiance_levels;
     vec3 rad = radiance_rgb(lv, q, stack_mode, wrap, raw);
     if (HFGI_VECTOR != 0) {
-        vec3 nc = normal_at(q, wrap);
+        vec3 nc = hfgi_normal_at(q, wrap, pc.texel_size);
         vec3 s = -vec3(cos(omega) * d, sin(omega));
         hfgi_sh_eval(normalize(2.0 * dot(nc, s) * nc - s));
         vec3 gl = vec3(0.0);
@@ -223,7 +204,7 @@ void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running
     float seg[HFGI_NE];
     hfgi_elevation(running, omega, seg);
     vec3 rad = member_radiance(rl, q, omega, d, HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0);
-    for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
+    HFGI_ADD_MOMENTS(u, rad, seg)
     running = omega;
     running_slope = slope;
 }
@@ -432,7 +413,7 @@ void main() {
     bool wrap = HFGI_WRAP != 0u;
     hfgi_Scan scan = hfgi_scan_begin(r, uvec2(pc.work_width, pc.work_height), pc.level_step, pc.level_bias,
                                      pc.texel_size, HFGI_STACK != 0u, wrap, HFGI_STATIC_FLAGS, pc.scan_extent, HFGI_NV);
-    vec3 N = normal_at(scan.p, wrap);
+    vec3 N = hfgi_normal_at(scan.p, wrap, pc.texel_size);
     bool tangent = (HFGI_STATIC_FLAGS & HFGI_FLAG_TANGENT) != 0u;
     float bmin = 3.402823466e38;
     // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
@@ -468,7 +449,7 @@ void main() {
             float seg[HFGI_NE];
             hfgi_elevation(running, limit, seg);
             vec3 rad = HFGI_VECTOR == 0 ? rad_p : member_radiance(0u, scan.p, limit, d, HFGI_RSTACK != 0u, wrap, hfgi_radiance_raw0);
-            for (int l = 0; l < HFGI_NE; ++l) u[l] += rad * seg[l];
+            HFGI_ADD_MOMENTS(u, rad, seg)
             running = limit;
         }
         uint slot = j * (pc.work_width * pc.work_height) + r.y * pc.work_width + r.x;

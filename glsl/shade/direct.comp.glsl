@@ -192,6 +192,7 @@ void main() {
             for (int k = 0; k < HFGI_NU; ++k) hfgi_T[k] *= unexpose;
         }
     }
+    bool diffuse_only = HFGI_BLOCKERS == 0u && HFGI_STORE_T == 0 && pc.glossy == 0u;
     for (uint s = 0u; s < (HFGI_INDIRECT != 0 ? 0u : pc.set_count); ++s) {
         uint vs = hfgi_stride(HFGI_N2);
         uint base = s * receivers * vs;
@@ -212,6 +213,9 @@ void main() {
         // The sum over j unrolled: V indexed by constants stays in registers (docs/performance.md
         // §19). The bound is a literal (order ≤ HFGI_MAX_SH_ORDER): the copies past n² are dead.
         [[dont_unroll]] for (int k = 0; k < HFGI_N2; ++k) {
+            // Rows only the diffuse lobe reads, where its band is zero (the clamped cosine's odd
+            // bands ≥ 3, the exact lobe's every band but 1): nothing else reads T_k.
+            if (diffuse_only && hfgi_zh_diffuse[int(sqrt(float(k) + 0.5))] == 0.0) continue;
             vec3 add = vec3(0.0);
             [[unroll]] for (int j = 0; j < HFGI_UNROLLED; ++j) {
                 if (j < HFGI_N2) add += hfgi_V[j] * hfgi_light(mbase + uint(j * HFGI_N2 + k)).rgb;

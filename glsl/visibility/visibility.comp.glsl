@@ -137,6 +137,10 @@ void main() {
 
     float V[HFGI_N2];
     for (int k = 0; k < HFGI_N2; ++k) V[k] = 0.0;
+    // gi.diffuse_lobe = "exact": V zero below the receiver's tangent plane, as the exact lobe
+    // needs (docs/accuracy.md §6); the normal is the indirect scan's (hfgi_normal_at).
+    bool clip = (HFGI_STATIC_FLAGS & HFGI_FLAG_TANGENT_CLIP) != 0u;
+    vec3 N = clip ? hfgi_normal_at(scan.p, HFGI_WRAP != 0u, pc.texel_size) : vec3(0.0, 0.0, 1.0);
 
     for (uint j = 0u; j < pc.sample_count; ++j) {
         vec4 smp = uintBitsToFloat(texelFetch(hfgi_samples_texels, int(pc.sample_offset + j)));
@@ -152,6 +156,7 @@ void main() {
             wmax = hfgi_horizon(scan, smp.xy, samples_max);
         }
         // eq. 11 within the sample's elevation window (§6), in the NLP or legendre basis.
+        if (clip) wmax = max(wmax, atan(-dot(N.xy, smp.xy), N.z));
         float v[HFGI_NE];
         hfgi_elevation(max(wmax, smp.z), smp.w, v);
         // eq. 20–21 folded: V += A_j v_j (hfgi_fold.glsl: in the legendre basis only A_j's

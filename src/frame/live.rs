@@ -345,7 +345,12 @@ impl Renderer {
         }
         let exponent_changed = material.exponent != old.material.exponent;
         if exponent_changed {
-            let consts = shade::constants(old.gi.sh_order, f64::from(material.exponent), self.live.triple_count);
+            let consts = shade::constants(
+                old.gi.sh_order,
+                old.gi.diffuse_lobe,
+                f64::from(material.exponent),
+                self.live.triple_count,
+            );
             let dst = self.shade.bindings()[3].raw;
             self.live.update(dst, 0, bytemuck::cast_slice(&consts).to_vec());
         }

@@ -21,10 +21,10 @@ use super::visibility::VisibilityPass;
 use crate::constants;
 use crate::error::Result;
 use crate::math::azimuth::AzimuthSet;
-use crate::math::{sh, triple, zh};
+use crate::math::{sh, triple};
 pub use crate::rules::lighting::{cap_solid_angle, set_lighting, window_solid_angle};
 use crate::rules::lighting::{light_sets, SetKind};
-use crate::scene::model::{Albedo, Scene};
+use crate::scene::model::{Albedo, DiffuseLobe, Scene};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
@@ -74,11 +74,12 @@ pub(crate) fn klm_table(n: usize) -> [f32; (constants::MAX_SH_ORDER * constants:
     klm
 }
 
-/// The constants block of the shader: K_l^m table, rotated-ZH band factors, triple count.
-pub(crate) fn constants(n: usize, exponent: f64, triple_count: u32) -> Vec<u32> {
+/// The constants block of the shader: K_l^m table, rotated-ZH band factors (the diffuse lobe of
+/// `gi.diffuse_lobe`, the Phong lobe), triple count.
+pub(crate) fn constants(n: usize, lobe: DiffuseLobe, exponent: f64, triple_count: u32) -> Vec<u32> {
     const N: usize = constants::MAX_SH_ORDER as usize;
     let klm = klm_table(n);
-    let cc = zh::clamped_cosine(n);
+    let cc = crate::rules::scene::diffuse_lobe(n, lobe);
     let mut diffuse = [0f32; N];
     let mut glossy = [0f32; N];
     for l in 0..n {
@@ -181,7 +182,7 @@ impl ShadeData {
             Albedo::Map(m) => m.iter().map(|a| [a[0], a[1], a[2], 0.0]).collect(),
             Albedo::Constant(_) => vec![[0.0; 4]],
         };
-        let consts = constants(n, scene.material.exponent as f64, entries.len() as u32);
+        let consts = constants(n, scene.gi.diffuse_lobe, scene.material.exponent as f64, entries.len() as u32);
         Self { light, entries, albedo, consts }
     }
 
@@ -210,7 +211,10 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
         ("hfgi.shade.light", upload_bytes(light_sets(scene).len() * (n * n + 1 + n * n * n * n) * 16)),
         ("hfgi.shade.triple", upload_bytes(triples * 8)),
         ("hfgi.shade.albedo", upload_bytes(albedo * 16)),
-        ("hfgi.shade.consts", upload_bytes(constants(n, scene.material.exponent as f64, triples as u32).len() * 4)),
+        (
+            "hfgi.shade.consts",
+            upload_bytes(constants(n, scene.gi.diffuse_lobe, scene.material.exponent as f64, triples as u32).len() * 4),
+        ),
     ]
 }
 

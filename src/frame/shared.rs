@@ -43,6 +43,10 @@ pub const FLAG_RAW_PLANE0: u32 = 64;
 /// `HFGI_FLAG_RAW_RPLANE0`: the same of the radiance stack (the indirect scan).
 pub const FLAG_RAW_RPLANE0: u32 = 128;
 
+/// `HFGI_FLAG_TANGENT_CLIP`: the visibility window starts no lower than the receiver's tangent
+/// elevation (`gi.diffuse_lobe = "exact"`: `V` zero below the tangent plane; docs/accuracy.md §6).
+pub const FLAG_TANGENT_CLIP: u32 = 256;
+
 /// The static flags of scans reading `heights` (and `radiance`) whose stacks' plane 0 holds
 /// level 0's own values.
 pub fn raw_plane_flags(heights: bool, radiance: bool) -> u32 {
@@ -137,7 +141,7 @@ pub fn azimuth_chunks(count: u32, cost: u32, budget: u32) -> Vec<(u32, u32)> {
 
 /// The `FLAG_*` bits of a scene's accuracy settings (docs/accuracy.md §4).
 pub fn scan_flags(gi: &crate::scene::model::GiSettings) -> u32 {
-    use crate::scene::model::{Horizon, Level0, OmegaMin};
+    use crate::scene::model::{DiffuseLobe, Horizon, Level0, OmegaMin};
     let mut f = 0;
     if gi.level0 == Level0::Bilinear {
         f |= FLAG_RAW_LEVEL0;
@@ -147,6 +151,9 @@ pub fn scan_flags(gi: &crate::scene::model::GiSettings) -> u32 {
     }
     if gi.omega_min == OmegaMin::Tangent {
         f |= FLAG_TANGENT;
+    }
+    if gi.diffuse_lobe == DiffuseLobe::Exact {
+        f |= FLAG_TANGENT_CLIP;
     }
     f
 }

@@ -231,7 +231,7 @@ pub fn render_truth_gpu_timed(
     let light32: Vec<[f32; 4]> = light.iter().map(|l| [l[0] as f32, l[1] as f32, l[2] as f32, 0.0]).collect();
     let caps = cap_buffer(scene, settings).0;
     let spheres = sphere_buffer(scene);
-    let consts = super::shade::constants(n, 1.0, 0);
+    let consts = super::shade::constants(n, crate::scene::model::DiffuseLobe::Sh, 1.0, 0);
     let usage =
         vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC;
     let mut bufs: Vec<Buffer> = Vec::new();

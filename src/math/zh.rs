@@ -53,6 +53,15 @@ pub fn clamped_cosine(n: usize) -> Vec<f64> {
         .collect()
 }
 
+/// ZH of the cosine `cosθ` itself, unclamped, for bands `0..n`: only band 1,
+/// `z_1 = 2π·sqrt(3/(4π))·2/3 = 2·sqrt(π/3)`, twice the clamped cosine's. Dotted with incident
+/// radiance that is zero below the tangent plane it gives the same irradiance as the whole
+/// clamped lobe, with nothing truncated (docs/accuracy.md §6).
+pub fn cosine(n: usize) -> Vec<f64> {
+    check_order(n);
+    (0..n).map(|l| if l == 1 { 2.0 * (PI / 3.0).sqrt() } else { 0.0 }).collect()
+}
+
 /// Phong lobe of exponent `s` (§7): the paper's ZH `{1, e^(−1/(2S)), e^(−2/S), e^(−9/(2S))}`,
 /// i.e. `z_l = e^(−l²/(2S))` for `l = 0..n`, about the reflection vector.
 ///
@@ -89,6 +98,19 @@ pub fn cap(n: usize, alpha: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The unclamped cosine's ZH by quadrature over the whole `[−1, 1]`: band 1 only, twice the
+    /// clamped cosine's band 1.
+    #[test]
+    fn cosine_is_band_one_twice_the_clamped_cosines() {
+        let (t, w) = gauss_legendre_on(-1.0, 1.0, 8);
+        let (cos, cc) = (cosine(6), clamped_cosine(6));
+        for (l, z) in cos.iter().enumerate() {
+            let want = zh_scale(l) * t.iter().zip(&w).map(|(&t, &w)| w * t * legendre(l, t)).sum::<f64>();
+            assert!((z - want).abs() < 1e-12, "band {l}: {z} against {want}");
+        }
+        assert!((cos[1] - 2.0 * cc[1]).abs() < 1e-12);
+    }
 
     #[test]
     fn cap_matches_thesis_closed_form() {

@@ -13,7 +13,9 @@ use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
 use crate::math::Mat;
 use crate::math::{elevation, triple, zh};
 use crate::rules::lighting::{light_sets, set_lighting, SetKind};
-use crate::scene::model::{Albedo, ElevationBasis, GiSettings, Horizon, Level0, PyramidMode, Scene, VisibilityMethod};
+use crate::scene::model::{
+    Albedo, DiffuseLobe, ElevationBasis, GiSettings, Horizon, Level0, PyramidMode, Scene, VisibilityMethod,
+};
 
 /// Tolerance (texels) of the domain test of docs/direct.md §2.
 pub const EDGE_TOL: f64 = 1e-3;
@@ -200,10 +202,60 @@ pub fn bspline_max(omega: &[f64]) -> f64 {
     best
 }
 
+/// Receiver normal at level-0 position `p` (docs/indirect.md §2): the CONVENTIONS.md height
+/// gradients of the four surrounding texels, bilinearly interpolated, then normalised.
+pub fn receiver_normal(scene: &Scene, p: [f64; 2]) -> [f64; 3] {
+    let f = &scene.field;
+    let (w, h, s) = (f.width() as i64, f.height() as i64, scene.texel_size);
+    let at = |i: i64, j: i64| f.get(i.rem_euclid(w) as usize, j.rem_euclid(h) as usize) as f64;
+    let grad = |i: i64, j: i64| {
+        let (i, j) =
+            if scene.wrap { (i.rem_euclid(w), j.rem_euclid(h)) } else { (i.clamp(0, w - 1), j.clamp(0, h - 1)) };
+        let (i0, i1, j0, j1) = if scene.wrap {
+            (i - 1, i + 1, j - 1, j + 1)
+        } else {
+            ((i - 1).max(0), (i + 1).min(w - 1), (j - 1).max(0), (j + 1).min(h - 1))
+        };
+        [(at(i1, j) - at(i0, j)) / ((i1 - i0) as f64 * s), (at(i, j1) - at(i, j0)) / ((j1 - j0) as f64 * s)]
+    };
+    let (fx, fy) = (p[0].floor(), p[1].floor());
+    let (tx, ty) = (p[0] - fx, p[1] - fy);
+    let (x0, y0) = (fx as i64, fy as i64);
+    let mut g = [0.0; 2];
+    for (dx, dy, wgt) in
+        [(0, 0, (1.0 - tx) * (1.0 - ty)), (1, 0, tx * (1.0 - ty)), (0, 1, (1.0 - tx) * ty), (1, 1, tx * ty)]
+    {
+        let gg = grad(x0 + dx, y0 + dy);
+        g[0] += wgt * gg[0];
+        g[1] += wgt * gg[1];
+    }
+    let len = (g[0] * g[0] + g[1] * g[1] + 1.0).sqrt();
+    [-g[0] / len, -g[1] / len, 1.0 / len]
+}
+
+/// ω_min of a receiver with normal `normal` along azimuth `phi`: its tangent plane (§3), the
+/// paper's `−asin(N·d)` or, with `tangent`, the exact tangent elevation `atan2(−N·d, N_z)`
+/// (CONVENTIONS.md, docs/accuracy.md §4).
+pub fn omega_min(normal: [f64; 3], phi: f64, tangent: bool) -> f64 {
+    let nd = normal[0] * phi.cos() + normal[1] * phi.sin();
+    if tangent {
+        (-nd).atan2(normal[2])
+    } else {
+        -nd.clamp(-1.0, 1.0).asin()
+    }
+}
+
 /// `V` of one light set at level-0 position `p` (§3–4); `mats` from
 /// [`crate::math::azimuth::wedge_matrices`].
 pub fn visibility_at(scan: &Scan, n: usize, set: &AzimuthSet, mats: &[Mat], p: [f64; 2]) -> Vec<f64> {
     visibility_from(scan, n, set, mats, |_, phi| scan.omega_max(p, phi))
+}
+
+/// The lowest elevation the visible window starts at along `phi` for a receiver of normal
+/// `normal`: with `gi.diffuse_lobe = "exact"` its tangent elevation (`V` zero below the tangent
+/// plane, docs/accuracy.md §6), else unbounded (`None`).
+pub fn tangent_clip(normal: Option<[f64; 3]>, phi: f64) -> f64 {
+    normal.map_or(f64::NEG_INFINITY, |nrm| omega_min(nrm, phi, true))
 }
 
 /// `V` of one light set from the horizon `omega(k, φ_k)` of each of its azimuths: the visible
@@ -225,7 +277,8 @@ fn visibility_from(
 }
 
 /// `V` of one light set at every receiver of the `work` grid with the swept horizons
-/// ([`super::sweep`], `gi.visibility = "sweep"`, near reach `reach` texels). The azimuth
+/// ([`super::sweep`], `gi.visibility = "sweep"`, near reach `reach` texels; `normal(r)` the
+/// receiver's normal for the tangent clip, [`tangent_clip`]). The azimuth
 /// directions are taken in f32, as the GPU reads them, so that both choose the same major axis
 /// at 45°.
 pub fn sweep_visibility(
@@ -235,13 +288,19 @@ pub fn sweep_visibility(
     mats: &[Mat],
     work: (usize, usize),
     reach: f64,
+    normal: impl Fn(usize) -> Option<[f64; 3]>,
 ) -> Vec<Vec<f64>> {
     let horizons: Vec<Vec<f64>> = set
         .phi
         .iter()
         .map(|&phi| super::sweep::horizons(scan, work, phi.cos() as f32 as f64, phi.sin() as f32 as f64, reach))
         .collect();
-    (0..work.0 * work.1).map(|r| visibility_from(scan, n, set, mats, |k, _| horizons[k][r])).collect()
+    (0..work.0 * work.1)
+        .map(|r| {
+            let nrm = normal(r);
+            visibility_from(scan, n, set, mats, |k, phi| horizons[k][r].max(tangent_clip(nrm, phi)))
+        })
+        .collect()
 }
 
 /// Bilinear interpolation of per-receiver vectors at `(x, y)` in receiver-grid units (§6).
@@ -284,7 +343,8 @@ pub fn normals(scene: &Scene) -> Vec<[f64; 3]> {
     out
 }
 
-/// The BRDF lobes of §7 for one scene: diffuse clamped cosine about the normal and the
+/// The BRDF lobes of §7 for one scene: the diffuse lobe of `gi.diffuse_lobe` (the clamped
+/// cosine or the cosine, docs/accuracy.md §6) about the normal and the
 /// normalised Phong lobe about the reflected view direction, as order-n ZH.
 pub struct Lobes {
     n: usize,
@@ -300,7 +360,7 @@ impl Lobes {
         let phong = (0..n)
             .map(|l| ((2 * l + 1) as f64 / (4.0 * PI)).sqrt() * (-((l * l) as f64) / (2.0 * exponent)).exp())
             .collect();
-        Self { n, cc: zh::clamped_cosine(n), phong }
+        Self { n, cc: crate::rules::scene::diffuse_lobe(n, scene.gi.diffuse_lobe), phong }
     }
 
     /// The Phong ZH rotated to the reflected view vector at texel `(x, y)` with normal `nrm`.
@@ -378,6 +438,11 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let sets = light_sets(scene);
+    // Receiver r's level-0 position, and its normal where the visibility is clipped at the
+    // tangent plane (gi.diffuse_lobe = "exact", the GPU's HFGI_FLAG_TANGENT_CLIP).
+    let receiver = |r: usize| [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
+    let clip = gi.diffuse_lobe == DiffuseLobe::Exact;
+    let normal = |p: [f64; 2]| clip.then(|| receiver_normal(scene, p));
 
     // Visibility at every receiver of the working grid (§1–4), from the ladder or the sweep.
     let visibility: Vec<Vec<Vec<f64>>> = sets
@@ -386,15 +451,19 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
         .map(|(si, (_, set))| {
             let mats = wedge_matrices(n, set, gi.interpolation, gi.elevation_basis);
             if oracle.is_none() && gi.visibility == VisibilityMethod::Sweep {
-                return sweep_visibility(&scan, n, set, &mats, work, gi.sweep_near as f64);
+                return sweep_visibility(&scan, n, set, &mats, work, gi.sweep_near as f64, |r| normal(receiver(r)));
             }
             (0..work.0 * work.1)
                 .map(|r| {
-                    let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
-                    match oracle {
-                        None => visibility_at(&scan, n, set, &mats, p),
-                        Some(hz) => visibility_from(&scan, n, set, &mats, |_, phi| hz(si, phi, p)),
-                    }
+                    let p = receiver(r);
+                    let nrm = normal(p);
+                    visibility_from(&scan, n, set, &mats, |_, phi| {
+                        let omega = match oracle {
+                            None => scan.omega_max(p, phi),
+                            Some(hz) => hz(si, phi, p),
+                        };
+                        omega.max(tangent_clip(nrm, phi))
+                    })
                 })
                 .collect()
         })

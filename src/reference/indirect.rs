@@ -3,6 +3,7 @@
 //! wedges with `M_lin`/`M_bspl` and `Rot_z` (eq. 19–21), shading with the BRDF lobes (§7).
 
 use super::direct::{interpolate, normals, render_direct, scan_steps, DirectOutput, Lobes, Scan};
+pub use super::direct::{omega_min, receiver_normal};
 use super::pyramid::{rescale, CpuPyramid};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
@@ -29,37 +30,6 @@ pub struct GiOutput {
 pub fn radiance_level(t: f64, k_u: u32, o_u: u32, n_u: usize) -> usize {
     let l = (k_u as f64 * t.log2() + 1e-6).floor() as i64 - (k_u * o_u) as i64;
     l.clamp(0, n_u as i64 - 1) as usize
-}
-
-/// Receiver normal at level-0 position `p` (docs/indirect.md §2): the CONVENTIONS.md height
-/// gradients of the four surrounding texels, bilinearly interpolated, then normalised.
-pub fn receiver_normal(scene: &Scene, p: [f64; 2]) -> [f64; 3] {
-    let f = &scene.field;
-    let (w, h, s) = (f.width() as i64, f.height() as i64, scene.texel_size);
-    let at = |i: i64, j: i64| f.get(i.rem_euclid(w) as usize, j.rem_euclid(h) as usize) as f64;
-    let grad = |i: i64, j: i64| {
-        let (i, j) =
-            if scene.wrap { (i.rem_euclid(w), j.rem_euclid(h)) } else { (i.clamp(0, w - 1), j.clamp(0, h - 1)) };
-        let (i0, i1, j0, j1) = if scene.wrap {
-            (i - 1, i + 1, j - 1, j + 1)
-        } else {
-            ((i - 1).max(0), (i + 1).min(w - 1), (j - 1).max(0), (j + 1).min(h - 1))
-        };
-        [(at(i1, j) - at(i0, j)) / ((i1 - i0) as f64 * s), (at(i, j1) - at(i, j0)) / ((j1 - j0) as f64 * s)]
-    };
-    let (fx, fy) = (p[0].floor(), p[1].floor());
-    let (tx, ty) = (p[0] - fx, p[1] - fy);
-    let (x0, y0) = (fx as i64, fy as i64);
-    let mut g = [0.0; 2];
-    for (dx, dy, wgt) in
-        [(0, 0, (1.0 - tx) * (1.0 - ty)), (1, 0, tx * (1.0 - ty)), (0, 1, (1.0 - tx) * ty), (1, 1, tx * ty)]
-    {
-        let gg = grad(x0 + dx, y0 + dy);
-        g[0] += wgt * gg[0];
-        g[1] += wgt * gg[1];
-    }
-    let len = (g[0] * g[0] + g[1] * g[1] + 1.0).sqrt();
-    [-g[0] / len, -g[1] / len, 1.0 / len]
 }
 
 /// NLP vectors `u` (per RGB channel, `n` values each) of one receiver along azimuth `phi`
@@ -119,18 +89,6 @@ pub fn scan_radiance(
         cast(i, q, omega, &mut running);
     }
     u
-}
-
-/// ω_min of a receiver with normal `normal` along azimuth `phi`: its tangent plane (§3), the
-/// paper's `−asin(N·d)` or, with `tangent`, the exact tangent elevation `atan2(−N·d, N_z)`
-/// (CONVENTIONS.md, docs/accuracy.md §4).
-pub fn omega_min(normal: [f64; 3], phi: f64, tangent: bool) -> f64 {
-    let nd = normal[0] * phi.cos() + normal[1] * phi.sin();
-    if tangent {
-        (-nd).atan2(normal[2])
-    } else {
-        -nd.clamp(-1.0, 1.0).asin()
-    }
 }
 
 /// The radial probes between ladder steps `t_prev` and `t` (texels; docs/accuracy.md §4): when

@@ -70,11 +70,21 @@ pub fn vector_pyramid(scene: &Scene) -> bool {
         && scene.material.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0))
 }
 
+/// The diffuse lobe of `gi.diffuse_lobe` as order-n ZH (the shading's, GPU and twin):
+/// [`crate::math::zh::clamped_cosine`] or [`crate::math::zh::cosine`].
+pub fn diffuse_lobe(n: usize, lobe: crate::scene::model::DiffuseLobe) -> Vec<f64> {
+    match lobe {
+        crate::scene::model::DiffuseLobe::Sh => crate::math::zh::clamped_cosine(n),
+        crate::scene::model::DiffuseLobe::Exact => crate::math::zh::cosine(n),
+    }
+}
+
 /// SH bands of the IR vector `U` the renderer stores (docs/indirect.md §4). The indirect shade
 /// of a diffuse surface reads `U` only through the clamped-cosine lobe about the normal, whose
 /// odd bands `l ≥ 3` are exactly zero ([`crate::math::zh::clamped_cosine`]): it stores the bands
 /// up to the last non-zero one (order 4: 3 bands, 9 of 16 coefficients) and shades exactly the
-/// same. All `n` bands when something else reads `U`: a specular colour (the Phong lobe and the
+/// same; with the exact lobe (`gi.diffuse_lobe = "exact"`, band 1 only) 2 bands, 4
+/// coefficients. All `n` bands when something else reads `U`: a specular colour (the Phong lobe and the
 /// glossy vector pyramid) or sphere blockers (the triple product `U ⊛ V_s` mixes the bands).
 /// Both are fixed at creation (`Renderer::set_material` and the sphere slots cannot add them).
 pub fn u_bands(scene: &Scene) -> usize {
@@ -82,7 +92,7 @@ pub fn u_bands(scene: &Scene) -> usize {
     if scene.material.specular.is_some() || !scene.spheres.is_empty() {
         return n;
     }
-    let zh = crate::math::zh::clamped_cosine(n);
+    let zh = diffuse_lobe(n, scene.gi.diffuse_lobe);
     zh.iter().rposition(|z| *z != 0.0).map_or(n, |l| l + 1)
 }
 

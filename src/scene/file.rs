@@ -203,6 +203,7 @@ pub fn parse_scene(text: &str, base_dir: &Path, source_name: &str, overrides: &[
     let camera = ctx.camera(raw.camera.as_ref(), &field, texel_size)?;
     let animation = ctx.animation(raw.animation.as_ref(), wrap)?;
     crate::scene::model::check_sweep(wrap, &gi).map_err(|e| ctx.wrap("gi.visibility", e))?;
+    crate::scene::model::check_lobe(&gi, spheres.len()).map_err(|e| ctx.wrap("gi.diffuse_lobe", e))?;
     crate::scene::model::check_local_wrap(wrap, local_lights.len()).map_err(|e| ctx.wrap("local_light", e))?;
     Ok(Scene {
         field,
@@ -318,6 +319,7 @@ struct RawGi {
     omega_min: Option<String>,
     elevation_basis: Option<String>,
     visibility: Option<String>,
+    diffuse_lobe: Option<String>,
     storage: Option<String>,
     sweep_near: Option<u32>,
     blocker_epsilon: Option<f64>,
@@ -1105,6 +1107,7 @@ impl Ctx<'_> {
             omega_min: parse_opt(&raw.omega_min).map_err(param)?.unwrap_or(d.omega_min),
             elevation_basis: parse_opt(&raw.elevation_basis).map_err(param)?.unwrap_or(d.elevation_basis),
             visibility: parse_opt(&raw.visibility).map_err(param)?.unwrap_or(d.visibility),
+            diffuse_lobe: parse_opt(&raw.diffuse_lobe).map_err(param)?.unwrap_or(d.diffuse_lobe),
             storage: parse_opt(&raw.storage).map_err(param)?.unwrap_or(d.storage),
             sweep_near: raw.sweep_near.unwrap_or(d.sweep_near),
             blocker_epsilon: raw.blocker_epsilon.unwrap_or(d.blocker_epsilon),

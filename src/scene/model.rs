@@ -207,6 +207,25 @@ settings_enum!(
 );
 
 settings_enum!(
+    /// The diffuse lobe the shading dots the incident SH radiance with (`gi.diffuse_lobe`,
+    /// docs/accuracy.md §6).
+    DiffuseLobe, "gi.diffuse_lobe", "`sh` or `exact`", {
+        /// The clamped cosine `max(N·ω, 0)` as an order-n ZH (the paper's §7): truncated, it
+        /// misses bands `l ≥ n` of the lobe, whose terms do not vanish where the incident light
+        /// starts sharply at the tangent plane (the indirect light, an open sky).
+        Sh = "sh",
+        /// The cosine `N·ω` itself, a band-1 function: exact once the incident radiance is zero
+        /// below the tangent plane, which the casting set is (`ω_min` tangent) and the
+        /// visibility is made (its window starts no lower than the tangent elevation). Then only
+        /// band 1 of the incident radiance matters: of `U` (stored to band 1) and of `L ⊛ V`,
+        /// which is exact for lighting of order `n − 1` (use `sh_order` one above the lighting's).
+        /// Diffuse shading only (a glossy lobe stays SH); full resolution (`subsample = 1`) and
+        /// the tangent `ω_min` only; not with sphere blockers.
+        Exact = "exact",
+    }
+);
+
+settings_enum!(
     /// Storage of the visibility vectors `V`, the IR vectors `U` and the radiance stack
     /// (`gi.storage`, docs/performance.md §9): what the scans and the synthesis write and the
     /// scan and the shading read. The height pyramid is always f32.
@@ -319,6 +338,35 @@ pub fn check_sweep(wrap: bool, gi: &GiSettings) -> Result<()> {
     Ok(())
 }
 
+/// The exact diffuse lobe needs the incident light zero below the shaded texel's tangent plane,
+/// which the casting set is only with the tangent `ω_min` and at full resolution (a sub-sampled
+/// receiver has its own normal: measured, `draft`'s indirect light went from 20–54% to 31–90%
+/// error), and SH shading throughout, which the sphere blockers' log modes and transfers are not
+/// (docs/accuracy.md §6).
+pub fn check_lobe(gi: &GiSettings, spheres: usize) -> Result<()> {
+    if gi.diffuse_lobe != DiffuseLobe::Exact {
+        return Ok(());
+    }
+    if gi.omega_min != OmegaMin::Tangent {
+        return Err(Error::param(
+            "gi.diffuse_lobe",
+            "exact",
+            "\"sh\" with gi.omega_min = \"asin\": the exact lobe needs the tangent ω_min (gi.omega_min = \"tangent\")",
+        ));
+    }
+    if gi.subsample != 1 {
+        return Err(Error::param(
+            "gi.diffuse_lobe",
+            "exact",
+            "\"sh\" with gi.subsample > 1: a sub-sampled receiver's tangent plane is not the shaded texel's (gi.subsample = 1)",
+        ));
+    }
+    if spheres > 0 {
+        return Err(Error::param("gi.diffuse_lobe", "exact", "\"sh\" in a scene with sphere blockers"));
+    }
+    Ok(())
+}
+
 /// Local lights need a non-periodic field (a periodic one would need every light repeated on
 /// the torus; docs/local-lights.md).
 pub fn check_local_wrap(wrap: bool, local_lights: usize) -> Result<()> {
@@ -393,6 +441,8 @@ pub struct GiSettings {
     pub elevation_basis: ElevationBasis,
     /// Horizons of the environment and key-light visibility: the ladder scan or line sweeps.
     pub visibility: VisibilityMethod,
+    /// The diffuse lobe of the shading: the order-n clamped-cosine ZH or the exact cosine.
+    pub diffuse_lobe: DiffuseLobe,
     /// Storage of the visibility and IR vectors and the radiance stack (f16 by default, at
     /// half the memory of f32).
     pub storage: Storage,
@@ -472,6 +522,7 @@ impl GiSettings {
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
             elevation_basis: if paper { ElevationBasis::Nlp } else { ElevationBasis::Legendre },
             visibility: VisibilityMethod::Ladder,
+            diffuse_lobe: DiffuseLobe::Sh,
             storage: Storage::F16,
             sweep_near: 16,
             blocker_epsilon: 0.2,
@@ -513,7 +564,8 @@ impl GiSettings {
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
              radial_probes={} radial_probes_later={} azimuths_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
-             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={} replay={}",
+             local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={} replay={} \
+             diffuse_lobe={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -545,7 +597,8 @@ impl GiSettings {
             self.blocker_shading,
             self.blocker_log_cap,
             self.blocker_key_lights,
-            self.replay
+            self.replay,
+            self.diffuse_lobe
         )
     }
 
@@ -962,7 +1015,8 @@ impl Scene {
         }
         self.material.check()?;
         self.camera.check()?;
-        check_sweep(self.wrap, &self.gi)
+        check_sweep(self.wrap, &self.gi)?;
+        check_lobe(&self.gi, self.spheres.len())
     }
 }
 
