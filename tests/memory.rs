@@ -76,6 +76,8 @@ fn cases() -> Vec<(&'static str, &'static str, Vec<&'static str>)> {
         // The later bounces' own azimuth set: more samples and fold matrices.
         ("later bounces, 8 azimuths", "", with(&["gi.bounces=2", "gi.azimuths_later=8"])),
         ("f16, sh order 3 (odd n²)", "", with(&["gi.storage=\"f16\"", "gi.sh_order=3", "gi.bounces=1"])),
+        // U stored to band 1 (4 coefficients per channel) with order-5 V.
+        ("exact lobe, n=5, 2 bounces", "", with(&["gi.diffuse_lobe=\"exact\"", "gi.sh_order=5", "gi.bounces=2"])),
         (
             "f16, spheres, log_field",
             "[[sphere]]\ncenter = [10.0, 12.0, 5.0]\nradius = 3.0\n",

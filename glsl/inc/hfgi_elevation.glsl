@@ -8,7 +8,7 @@
 
 // The highest Fourier order the includer needs (HFGI_KMAX ≤ n; row (l, m) of a fold reads
 // orders ≤ l + 1, so a vector kept to bands < b needs b): the moments above it stay 0 and
-// hfgi_add_moments leaves them out. Default: every order.
+// HFGI_ADD_MOMENTS leaves them out. Default: every order.
 #ifndef HFGI_KMAX
 #define HFGI_KMAX HFGI_N
 #endif

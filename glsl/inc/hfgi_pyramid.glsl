@@ -48,8 +48,8 @@ const uint HFGI_FLAG_SWEEP = 32u; // visibility: ω_max from the line sweep's ho
 // set_raw_plane0): with HFGI_FLAG_RAW_LEVEL0, level 0 is read through the stack like every other
 // level, one read path per sample (docs/performance.md §17).
 const uint HFGI_FLAG_RAW_PLANE0 = 64u;
-const uint HFGI_FLAG_TANGENT_CLIP = 256u; // visibility: the window starts no lower than the tangent elevation
 const uint HFGI_FLAG_RAW_RPLANE0 = 128u;
+const uint HFGI_FLAG_TANGENT_CLIP = 256u; // visibility: the window starts no lower than the tangent elevation
 // Flags that change between the dispatches of one pipeline (frame::shared::DYNAMIC_FLAGS). The
 // others, and the storage mode and wrap, are fixed at pipeline creation: the scanning shaders
 // take them from specialization constants (frame::shared::static_modes), because lavapipe runs
