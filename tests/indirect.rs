@@ -482,9 +482,15 @@ fn the_indirect_shade_writes_the_next_bounces_level_0() {
 #[test]
 fn diffuse_u_keeps_the_bands_the_clamped_cosine_reads() {
     let ctx = gpu();
-    for (n, kept, storage) in [(4usize, 3usize, "f32"), (4, 3, "f16"), (6, 5, "f32")] {
+    // (order, bands kept, storage, lobe): the exact lobe (tests/lobe.rs) reads band 1 only.
+    let exact = hfgi::scene::model::DiffuseLobe::Exact;
+    let sh = hfgi::scene::model::DiffuseLobe::Sh;
+    for (n, kept, storage, lobe) in
+        [(4usize, 3usize, "f32", sh), (4, 3, "f16", sh), (6, 5, "f32", sh), (5, 2, "f32", exact)]
+    {
         let mut s = scene(rough_field(37, 29, 11));
         s.gi.sh_order = n;
+        s.gi.diffuse_lobe = lobe;
         s.gi.azimuths = 8;
         s.gi.bounces = 2;
         s.gi.storage =

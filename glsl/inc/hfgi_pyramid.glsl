@@ -190,7 +190,7 @@ bool hfgi_scan_sample(hfgi_Scan s, int i, float t, int n_v, vec2 d, float base, 
 }
 
 // CONVENTIONS.md height gradient at texel t of level 0 (one-sided at the border, periodic with
-// wrap), per unit of `texel` (the texel size). Twin: reference::direct::receiver_normal.
+// wrap), per unit of `texel` (the texel size). Twin: reference::tangent::receiver_normal.
 vec2 hfgi_gradient(ivec2 t, bool wrap, float texel) {
     hfgi_Level l0 = hfgi_table[0];
     int w = int(l0.width), h = int(l0.height);

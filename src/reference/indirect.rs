@@ -3,8 +3,8 @@
 //! wedges with `M_lin`/`M_bspl` and `Rot_z` (eq. 19–21), shading with the BRDF lobes (§7).
 
 use super::direct::{interpolate, normals, render_direct, scan_steps, DirectOutput, Lobes, Scan};
-pub use super::direct::{omega_min, receiver_normal};
 use super::pyramid::{rescale, CpuPyramid};
+pub use super::tangent::{omega_min, receiver_normal};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
 use crate::math::{elevation, zh};

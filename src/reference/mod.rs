@@ -11,6 +11,7 @@ pub mod pyramid;
 pub mod ray;
 pub mod sh_eval;
 pub mod sweep;
+pub mod tangent;
 pub mod truth;
 pub mod water;
 pub mod work;
