@@ -132,4 +132,15 @@ fn exact_lobe_needs_the_tangent_omega_min_full_resolution_and_no_blockers() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("gi.diffuse_lobe") && e.contains("blockers"), "{e}");
+    // A scene built in code is checked by the renderer, sphere slots of its options included.
+    let ctx = gpu();
+    let mut s = exact(scene(rough_field(16, 16, 1)));
+    s.gi.subsample = 2;
+    let e = hfgi::frame::Renderer::new(&ctx, &s).err().expect("sub-sampled exact lobe").to_string();
+    assert!(e.contains("gi.diffuse_lobe") && e.contains("subsample"), "{e}");
+    s.gi.subsample = 1;
+    let opts = hfgi::frame::RendererOptions { spheres: Some(1), ..Default::default() };
+    let e = hfgi::frame::Renderer::with_options(&ctx, &s, &opts).err().expect("a sphere slot").to_string();
+    assert!(e.contains("gi.diffuse_lobe") && e.contains("blockers"), "{e}");
+    assert!(common::finish(ctx).is_empty());
 }

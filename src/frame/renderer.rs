@@ -78,6 +78,8 @@ impl Renderer {
 
     fn create(ctx: &Context, scene: &Scene) -> Result<Self> {
         scene.gi.validate()?;
+        // With the sphere slots of the options: the exact lobe takes no blockers.
+        crate::scene::model::check_lobe(&scene.gi, scene.spheres.len())?;
         scene.check_limits()?;
         let (w, h) = (scene.field.width(), scene.field.height());
         let work = scene.gi.working_size(w, h);
