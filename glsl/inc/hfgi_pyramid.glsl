@@ -214,4 +214,10 @@ vec3 hfgi_normal_at(vec2 q, bool wrap, float texel) {
     return normalize(vec3(-g, 1.0));
 }
 
+// The tangent elevation atan2(−N·d, N_z) of normal N along unit azimuth d (CONVENTIONS.md): the
+// indirect scan's ω_min, the visibility's tangent clip. Twin: reference::tangent::omega_min.
+float hfgi_tangent_elevation(vec3 N, vec2 d) {
+    return atan(-dot(N.xy, d), N.z);
+}
+
 #endif

@@ -437,7 +437,7 @@ void main() {
         vec2 d = uintBitsToFloat(texelFetch(hfgi_samples_texels, int(j)).xy);
         // ω_min: the tangent plane of the receiver along φ (§3): the paper's −asin(N·d), or the
         // exact tangent elevation atan2(−N·d, N_z) (CONVENTIONS.md; docs/accuracy.md §4).
-        float running = tangent ? atan(-dot(N.xy, d), N.z) : -asin(clamp(dot(N.xy, d), -1.0, 1.0));
+        float running = tangent ? hfgi_tangent_elevation(N, d) : -asin(clamp(dot(N.xy, d), -1.0, 1.0));
         vec3 u[HFGI_NE];
         for (int l = 0; l < HFGI_NE; ++l) u[l] = vec3(0.0);
         // The near-field limit t → 0 (with near steps): the receiver's own surface, seen with the

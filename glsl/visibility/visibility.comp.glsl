@@ -156,7 +156,7 @@ void main() {
             wmax = hfgi_horizon(scan, smp.xy, samples_max);
         }
         // eq. 11 within the sample's elevation window (§6), in the NLP or legendre basis.
-        if (clip) wmax = max(wmax, atan(-dot(N.xy, smp.xy), N.z));
+        if (clip) wmax = max(wmax, hfgi_tangent_elevation(N, smp.xy));
         float v[HFGI_NE];
         hfgi_elevation(max(wmax, smp.z), smp.w, v);
         // eq. 20–21 folded: V += A_j v_j (hfgi_fold.glsl: in the legendre basis only A_j's

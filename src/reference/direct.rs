@@ -203,12 +203,6 @@ pub fn bspline_max(omega: &[f64]) -> f64 {
     best
 }
 
-/// `V` of one light set at level-0 position `p` (§3–4); `mats` from
-/// [`crate::math::azimuth::wedge_matrices`].
-pub fn visibility_at(scan: &Scan, n: usize, set: &AzimuthSet, mats: &[Mat], p: [f64; 2]) -> Vec<f64> {
-    visibility_from(scan, n, set, mats, |_, phi| scan.omega_max(p, phi))
-}
-
 /// `V` of one light set from the horizon `omega(k, φ_k)` of each of its azimuths: the visible
 /// window `[max(ω, lo), hi]` in the elevation basis (§3), accumulated over the wedges (§4).
 fn visibility_from(
@@ -390,10 +384,12 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let sets = light_sets(scene);
     // Receiver r's level-0 position, and its normal where the visibility is clipped at the
-    // tangent plane (gi.diffuse_lobe = "exact", the GPU's HFGI_FLAG_TANGENT_CLIP).
+    // tangent plane (gi.diffuse_lobe = "exact", the GPU's HFGI_FLAG_TANGENT_CLIP): once per
+    // receiver, for every light set.
     let receiver = |r: usize| [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
     let clip = gi.diffuse_lobe == DiffuseLobe::Exact;
-    let normal = |p: [f64; 2]| clip.then(|| receiver_normal(scene, p));
+    let clip_normals: Vec<Option<[f64; 3]>> =
+        (0..work.0 * work.1).map(|r| clip.then(|| receiver_normal(scene, receiver(r)))).collect();
 
     // Visibility at every receiver of the working grid (§1–4), from the ladder or the sweep.
     let visibility: Vec<Vec<Vec<f64>>> = sets
@@ -402,12 +398,11 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
         .map(|(si, (_, set))| {
             let mats = wedge_matrices(n, set, gi.interpolation, gi.elevation_basis);
             if oracle.is_none() && gi.visibility == VisibilityMethod::Sweep {
-                return sweep_visibility(&scan, n, set, &mats, work, gi.sweep_near as f64, |r| normal(receiver(r)));
+                return sweep_visibility(&scan, n, set, &mats, work, gi.sweep_near as f64, |r| clip_normals[r]);
             }
             (0..work.0 * work.1)
                 .map(|r| {
-                    let p = receiver(r);
-                    let nrm = normal(p);
+                    let (p, nrm) = (receiver(r), clip_normals[r]);
                     visibility_from(&scan, n, set, &mats, |_, phi| {
                         let omega = match oracle {
                             None => scan.omega_max(p, phi),

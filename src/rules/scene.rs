@@ -73,9 +73,11 @@ pub fn vector_pyramid(scene: &Scene) -> bool {
 /// The diffuse lobe of `gi.diffuse_lobe` as order-n ZH (the shading's, GPU and twin):
 /// [`crate::math::zh::clamped_cosine`] or [`crate::math::zh::cosine`].
 pub fn diffuse_lobe(n: usize, lobe: crate::scene::model::DiffuseLobe) -> Vec<f64> {
+    use crate::math::zh;
+    use crate::scene::model::DiffuseLobe;
     match lobe {
-        crate::scene::model::DiffuseLobe::Sh => crate::math::zh::clamped_cosine(n),
-        crate::scene::model::DiffuseLobe::Exact => crate::math::zh::cosine(n),
+        DiffuseLobe::Sh => zh::clamped_cosine(n),
+        DiffuseLobe::Exact => zh::cosine(n),
     }
 }
 
