@@ -78,8 +78,7 @@ impl Renderer {
 
     fn create(ctx: &Context, scene: &Scene) -> Result<Self> {
         scene.gi.validate()?;
-        // With the sphere slots of the options: the exact lobe takes no blockers.
-        crate::scene::model::check_lobe(&scene.gi, scene.spheres.len())?;
+        // Also the exact lobe's restrictions (check_lobe), on the scene with the options' slots.
         scene.check_limits()?;
         let (w, h) = (scene.field.width(), scene.field.height());
         let work = scene.gi.working_size(w, h);
