@@ -273,7 +273,7 @@ fn estimate_rejects_what_the_renderer_rejects() {
 /// sub-sampling (no device); the default preset's storage is f16, less than f32's.
 #[test]
 fn estimate_512_by_subsample() {
-    for sub in [1, 2, 4] {
+    for sub in [1u32, 2, 4] {
         let s = format!("gi.subsample={sub}");
         let scene = scene_of("", &["heightfield.size=512", "gi.quality=\"default\"", "gi.bounces=1", s.as_str()]);
         let r = memory::renderer(&scene).unwrap();
@@ -298,6 +298,20 @@ fn estimate_512_by_subsample() {
             assert_eq!(get("hfgi.pyramid.stack"), 4 * planes as u64);
             // Table 1 of the paper: 76 MB at 1× (issue 12).
             assert!(r.total() <= 76_000_000, "{} B", r.total());
+        } else {
+            // Sub-sampled, the radiance pyramid starts at the working grid (docs/indirect.md §1):
+            // a 512/sub pyramid with k_u = 4 (level i has round(N·2^(−i/4)) texels a side,
+            // ⌊4·log2 N⌋ + 1 levels), 3 channels of f32; its stack holds levels 0 to 22 − 4·log2
+            // sub (the same ladder, k_u·log2 sub levels fewer), halved planes as above.
+            let get = |name: &str| r.buffers.iter().find(|(b, _)| b == name).unwrap().1;
+            let n = 512 / sub as u64;
+            let count = 4 * n.ilog2() as i32 + 1;
+            let texels: u64 =
+                (0..count).map(|i| ((n as f64) * 2f64.powf(-i as f64 / 4.0)).round() as u64).map(|w| w * w).sum();
+            assert_eq!(get("hfgi.radiance.levels"), 3 * 4 * texels, "subsample {sub}");
+            let stack = 23 - 4 * sub.ilog2() as u64;
+            let plane = |i: u64| (n >> (i / 4)).pow(2);
+            assert_eq!(get("hfgi.radiance.stack"), 3 * 2 * (0..stack).map(plane).sum::<u64>(), "subsample {sub}");
         }
         assert!(r.total() < memory::renderer(&scene_of("", &f32_)).unwrap().total());
         let largest = r.largest().unwrap();

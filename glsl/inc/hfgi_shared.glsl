@@ -81,7 +81,7 @@ struct hfgi_ShadePush {
     uint sphere_count;  // sphere slots (binding 10: 2 vec4 per slot), for the key lights' shadows
     uint key_overlap;   // 1: key lights shadowed by the exact cap overlap with the spheres
     float u_scale;      // indirect mode: the pre-exposure U is stored at (hfgi_store.glsl); read as U / u_scale
-    uint pad0;
+    uint next_mode;     // indirect mode: the exit radiance → 0 level 0 of the radiance pyramid, 1 the total plane, 2 nowhere
     uint pad1;
     uint pad2;
     vec4 camera;        // world position of the camera (xyz), high part
@@ -148,16 +148,20 @@ struct hfgi_IndirectPush {
     float radiance_scale; // the pre-exposure of the f16 radiance stack and U (hfgi_store.glsl): read / it, store × it
 };
 
-// Push constants of radiance.gather. 32 bytes.
+// Push constants of radiance.gather. 48 bytes.
 struct hfgi_GatherPush {
-    uint width;
+    uint width;          // level 0 of the radiance pyramid (the working grid when sub-sampled)
     uint height;
     uint channel_stride; // floats per channel in the radiance levels buffer
     uint vector;         // 1: channels 0-2 diffuse only, then 3 n² incident SH channels
     uint n2;
     uint glossy;         // 1: the shading buffer has the glossy planes (direct glossy: plane 4)
+    uint src_width;      // the shading planes (the field)
+    uint src_height;
+    uint plane;          // the shading plane read: HFGI_PLANE_DIRECT, or HFGI_PLANE_TOTAL (later bounces, working grid)
     uint pad0;
     uint pad1;
+    uint pad2;
 };
 
 // Push constants of the view raster pass (glsl/view/raster.vert.glsl). 112 bytes.

@@ -94,8 +94,13 @@ const int hfgi_u_bands = HFGI_NU >= 64 ? 8 : HFGI_NU >= 49 ? 7 : HFGI_NU >= 36 ?
 float hfgi_base[HFGI_NV];
 vec3 hfgi_U[HFGI_NU];
 // Radiance level 0, read once per receiver (radiance_begin): its size, the scale from level-0
-// height positions to its texels, and its channels' offsets and biases.
+// height positions to its texels, and its channels' offsets and biases. Positions q are the
+// field's texels; level 0 is the field or, sub-sampled, the working grid
+// (rules::scene::radiance_base): hfgi_r_base is level 0's entry with the field's size, the base
+// every radiance level is addressed from.
 ivec2 hfgi_r0_size;
+vec2 hfgi_field_size;
+hfgi_Level hfgi_r_base;
 vec2 hfgi_r0_raw_scale;
 uvec3 hfgi_r0_offset;
 vec3 hfgi_r0_bias;
@@ -104,7 +109,12 @@ uint hfgi_rstride;
 
 void radiance_begin() {
     hfgi_Level r0 = hfgi_radiance_table[0];
-    vec2 n0 = vec2(float(r0.width), float(r0.height));
+    hfgi_Level h0 = hfgi_table[0];
+    hfgi_r_base = r0;
+    hfgi_r_base.width = h0.width;
+    hfgi_r_base.height = h0.height;
+    vec2 n0 = vec2(float(h0.width), float(h0.height));
+    hfgi_field_size = n0;
     hfgi_r0_size = ivec2(int(r0.width), int(r0.height));
     hfgi_r0_raw_scale = vec2(hfgi_r0_size) / n0;
     for (uint c = 0u; c < 3u; ++c) {
@@ -129,16 +139,15 @@ vec3 radiance_rgb(uint lv, vec2 q, bool stack_mode, bool wrap, bool raw) {
     uint n_u = pc.radiance_levels;
     vec3 rad;
     if (!raw && !stack_mode) {
-        hfgi_Level r0 = hfgi_radiance_table[0];
         for (uint c = 0u; c < 3u; ++c) {
             uint e = c * n_u + lv;
-            rad[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, false, wrap, false);
+            rad[c] = hfgi_pyramid_at(hfgi_r_base, hfgi_radiance_table[e], e, q, false, wrap, false);
         }
         return rad;
     }
     uvec4 plane = raw ? uvec4(0u) : hfgi_rplanes(lv);
     ivec2 size = raw ? hfgi_r0_size : ivec2(plane.xy);
-    vec2 pw = (q + 0.5) * (raw ? hfgi_r0_raw_scale : vec2(plane.xy) / vec2(hfgi_r0_size)) - 0.5;
+    vec2 pw = (q + 0.5) * (raw ? hfgi_r0_raw_scale : vec2(plane.xy) / hfgi_field_size) - 0.5;
     vec2 fl = floor(pw);
     vec2 f = pw - fl;
     ivec2 i = ivec2(fl);
@@ -171,7 +180,6 @@ const bool hfgi_radiance_raw0 =
     (HFGI_STATIC_FLAGS & (HFGI_FLAG_RAW_LEVEL0 | HFGI_FLAG_RAW_RPLANE0)) == HFGI_FLAG_RAW_LEVEL0;
 vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, bool stack_mode, bool wrap, bool raw0) {
     bool raw = raw0 && lv == 0u;
-    hfgi_Level r0 = hfgi_radiance_table[0];
     uint n_u = pc.radiance_levels;
     vec3 rad = radiance_rgb(lv, q, stack_mode, wrap, raw);
     if (HFGI_VECTOR != 0) {
@@ -185,7 +193,7 @@ vec3 member_radiance(uint lv, vec2 q, float omega, vec2 d, bool stack_mode, bool
                 vec3 t;
                 for (uint c = 0u; c < 3u; ++c) {
                     uint e = (3u + 3u * uint(k) + c) * n_u + lv;
-                    t[c] = hfgi_pyramid_at(r0, hfgi_radiance_table[e], e, q, false, wrap, raw);
+                    t[c] = hfgi_pyramid_at(hfgi_r_base, hfgi_radiance_table[e], e, q, false, wrap, raw);
                 }
                 gl += t * (hfgi_zh_glossy[l] * hfgi_y[k]);
             }

@@ -22,12 +22,12 @@ use super::pyramid_max::{uses_max_bound, MaxPyramid};
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
 use super::shade::ShadePass;
-use super::shared::{IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND};
+use super::shared::{IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND, NEXT_LEVEL0, NEXT_NONE, NEXT_TOTAL};
 use crate::error::Result;
 use crate::math::azimuth;
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
-use crate::rules::scene::u_coefficients;
+use crate::rules::scene::{radiance_base, u_coefficients};
 use crate::scene::model::{Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
@@ -67,6 +67,8 @@ pub struct IndirectPass {
     /// [`IndirectPass::read_u`]).
     u_coefficients: usize,
     storage: Storage,
+    /// `gi.bounces`: [`IndirectPass::record_shade`]'s last bounce.
+    bounces: u32,
 }
 
 /// What the scan uploads, from the scene: the azimuth samples (`[cos φ, sin φ, 0, 0]`) and
@@ -106,7 +108,8 @@ impl ScanData {
 /// the scan uploads as `hfgi.indirect.radiance_level`.
 pub(crate) fn radiance_levels(scene: &Scene, ladder: &[f64]) -> Result<Vec<u32>> {
     let gi = &scene.gi;
-    let (w, h) = (scene.field.width(), scene.field.height());
+    // The pyramid's own level-0 grid: the ladder's steps in its texels.
+    let (w, h) = radiance_base(scene);
     let n_u = PyramidLayout::new(w, h, gi.radiance_level_step)?.count();
     let n0 = w.max(h) as f64;
     let level = |tau: f64| radiance_level(n0 * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u) as u32;
@@ -197,7 +200,7 @@ fn radiance_pyramid(
     let n = gi.sh_order;
     RadiancePyramid::new(
         ctx,
-        (scene.field.width(), scene.field.height()),
+        radiance_base(scene),
         work,
         gi.radiance_level_step,
         gi.pyramid,
@@ -208,6 +211,7 @@ fn radiance_pyramid(
             shade: shade.output(),
             incident_direct: shade.incident(),
             glossy_planes: super::shade::glossy_planes(scene),
+            field: (scene.field.width(), scene.field.height()),
         },
     )
 }
@@ -334,6 +338,7 @@ impl IndirectPass {
             shade_push: shade.push(),
             u_coefficients: u_coefficients(scene),
             storage: gi.storage,
+            bounces: gi.bounces,
         };
         pass.set_pre_exposure(super::storage::pre_exposure(scene));
         Ok(pass)
@@ -356,7 +361,7 @@ impl IndirectPass {
         for b in 1..=bounces {
             self.radiance.record(rec, b);
             self.record_scan(rec, b);
-            self.record_shade(rec, b);
+            self.record_shade_of(rec, b, b == bounces);
         }
     }
 
@@ -415,10 +420,21 @@ impl IndirectPass {
     }
 
     /// Records the shading of bounce `bounce` (1-based; stage `indirect.shade`): bounce 1
-    /// writes the indirect planes, later bounces add to them.
+    /// writes the indirect planes, later bounces add to them. On a working-grid radiance
+    /// pyramid a bounce before the scene's last (`gi.bounces`) leaves its exit radiance in the
+    /// total plane for the next bounce's gather, and the last one writes the total.
     pub fn record_shade(&self, rec: &mut Recorder, bounce: u32) {
+        self.record_shade_of(rec, bounce, bounce >= self.bounces);
+    }
+
+    fn record_shade_of(&self, rec: &mut Recorder, bounce: u32, last: bool) {
+        let next_mode = match (self.radiance.on_working_grid(), last) {
+            (false, _) => NEXT_LEVEL0,
+            (true, false) => NEXT_TOTAL,
+            (true, true) => NEXT_NONE,
+        };
         rec.scope(STAGE_SHADE, |ctx, cmd| {
-            let push = ShadePush { accumulate: (bounce > 1) as u32, ..self.shade_push };
+            let push = ShadePush { accumulate: (bounce > 1) as u32, next_mode, ..self.shade_push };
             let g =
                 [groups(push.width, crate::constants::WORKGROUP), groups(push.height, crate::constants::WORKGROUP), 1];
             self.shade.dispatch(ctx, cmd, self.shade_set, bytemuck::bytes_of(&push), g);
@@ -445,7 +461,9 @@ impl IndirectPass {
 
     /// Diagnostics: the radiance the last bounce leaves for the next one in level 0 of the
     /// radiance pyramid, as rgb per texel (`W × H`: its diffuse + glossy exit radiance, or the
-    /// diffuse part alone with the glossy vector pyramid), read back (waits).
+    /// diffuse part alone with the glossy vector pyramid), read back (waits). On a working-grid
+    /// pyramid ([`RadiancePyramid::on_working_grid`]) level 0 is that grid and holds the last
+    /// bounce's own input (the shades pass their exit radiance on through the total plane).
     pub fn read_next(&self, ctx: &Context) -> Result<Vec<f32>> {
         let p = &self.radiance.pyramid;
         let (l0, stride) = (p.layout().levels[0], p.layout().total);

@@ -133,7 +133,8 @@ fn indirect_pass(scene: &Scene, work: (usize, usize), n_v: usize) -> Result<Memo
     let (channels, mode) = radiance::shape(gi.pyramid, vector_pyramid(scene).then_some(n2));
     let kind = radiance_kind(channels, gi.storage);
     let planes = Some(indirect::radiance_stack_levels(&scan.radiance_levels(scene)?));
-    e.buffers(PyramidBuffers::new(w, h, work, gi.radiance_level_step, mode, kind, planes, None)?.named(kind));
+    let (bw, bh) = crate::rules::scene::radiance_base(scene);
+    e.buffers(PyramidBuffers::new(bw, bh, work, gi.radiance_level_step, mode, kind, planes, None)?.named(kind));
     if uses_max_bound(scene) {
         e.buffer(pyramid_max::BUFFER_NAME, pyramid_max::buffer_bytes(&MaxLayout::new(w, h)));
     }

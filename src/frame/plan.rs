@@ -233,6 +233,9 @@ pub struct Planner {
     /// Why the indirect scan does not read the max pyramid (`None`: it does; with indirect
     /// light only).
     no_max_bound: Option<&'static str>,
+    /// The radiance pyramid's level 0 is the working grid ([`crate::rules::scene::radiance_base`]):
+    /// every bounce gathers.
+    radiance_on_work: bool,
 }
 
 /// The plan of `frame` for `scene` (`Planner::new(scene).plan(frame)`).
@@ -256,6 +259,7 @@ impl Planner {
         let ladder = crate::reference::direct::scan_steps(gi, levels);
         let radiance_stack =
             super::indirect::radiance_levels(scene, &ladder).map_or(0, |l| super::indirect::radiance_stack_levels(&l));
+        let base = crate::rules::scene::radiance_base(scene);
         Self {
             size,
             work: gi.working_size(size.0, size.1),
@@ -264,7 +268,8 @@ impl Planner {
             levels,
             stack_levels: super::pyramid::height_stack_levels(gi, levels),
             radiance_level_step: gi.radiance_level_step,
-            radiance_levels: count(gi.radiance_level_step),
+            radiance_levels: PyramidLayout::new(base.0, base.1, gi.radiance_level_step).map_or(0, |l| l.count()),
+            radiance_on_work: base != size,
             radiance_stack_levels: radiance_stack,
             environment: has_environment(scene),
             azimuths: gi.azimuths,
@@ -465,7 +470,12 @@ impl Planner {
                 let of = format!("gi.bounces = {n}, bounce {b} of {n}");
                 let kind = self.radiance_kind();
                 if b == 1 {
-                    let r = format!("{of}: gathers the direct exit radiance ({when})");
+                    let onto = if self.radiance_on_work { ", averaged to the working grid" } else { "" };
+                    let r = format!("{of}: gathers the direct exit radiance{onto} ({when})");
+                    add(&mut stages, Stage::RadianceGather(b), r);
+                    add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {kind}"));
+                } else if self.radiance_on_work {
+                    let r = format!("{of}: averages bounce {}'s exit radiance to the working grid", b - 1);
                     add(&mut stages, Stage::RadianceGather(b), r);
                     add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {kind}"));
                 } else {

@@ -6,7 +6,10 @@
 //! Input: bounce 1's gather reads the direct exit radiance (shading planes `direct` + direct
 //! glossy: the paper's scalar approximation for mixtures) into level 0; for bounce `b > 1` the
 //! indirect shade of bounce `b − 1` has written that sum into level 0 itself (no gather, no
-//! buffer in between). Output: the levels (and stack) buffers of
+//! buffer in between). A sub-sampled scalar pyramid's level 0 is the working grid
+//! ([`crate::rules::scene::radiance_base`]): the gather averages each cell's field texels, and
+//! for `b > 1` it reads the total plane, where the indirect shade of bounce `b − 1` left its
+//! exit radiance (the last bounce's shade writes the total there). Output: the levels (and stack) buffers of
 //! [`RadiancePyramid::pyramid`], table entries with `source = 1`.
 //! Barriers: compute→compute after each stage.
 
@@ -14,6 +17,7 @@ use ash::vk;
 
 use super::pyramid::{HeightPyramid, PyramidKind};
 use super::shared::GatherPush;
+use crate::constants::{PLANE_DIRECT, PLANE_TOTAL};
 use crate::error::Result;
 use crate::scene::model::{PyramidMode, Storage};
 use crate::shaders;
@@ -54,6 +58,8 @@ pub struct RadianceInputs<'a> {
     pub incident_direct: &'a Buffer,
     /// Whether the shading buffer has the glossy planes (`shade::planes`).
     pub glossy_planes: bool,
+    /// The shading planes' size (the field's).
+    pub field: (usize, usize),
 }
 
 pub struct RadiancePyramid {
@@ -97,7 +103,10 @@ impl RadiancePyramid {
                     vector: vector_n2.is_some() as u32,
                     n2: vector_n2.unwrap_or(0),
                     glossy: inputs.glossy_planes as u32,
-                    pad: [0; 2],
+                    src_width: inputs.field.0 as u32,
+                    src_height: inputs.field.1 as u32,
+                    plane: PLANE_DIRECT,
+                    pad: [0; 3],
                 };
                 Ok(Self { pyramid, gather, set, push })
             }
@@ -108,19 +117,34 @@ impl RadiancePyramid {
         }
     }
 
-    /// Records bounce `bounce`'s pyramid (1-based): the gather for bounce 1 (later bounces'
-    /// level 0 was written by the previous indirect shade), then decimate (+ synthesize).
+    /// Records bounce `bounce`'s pyramid (1-based): the gather ([`Self::gathers`]), then
+    /// decimate (+ synthesize).
     pub fn record(&self, rec: &mut Recorder, bounce: u32) {
-        if bounce == 1 {
-            self.record_gather(rec);
+        if self.gathers(bounce) {
+            self.record_gather(rec, bounce);
         }
         self.pyramid.record(rec);
     }
 
-    /// Records the gather of bounce 1's input (stage `radiance.gather`).
-    pub fn record_gather(&self, rec: &mut Recorder) {
+    /// Whether level 0 is the working grid, smaller than the field
+    /// ([`crate::rules::scene::radiance_base`]): each of its texels the mean of a cell.
+    pub fn on_working_grid(&self) -> bool {
+        (self.push.width, self.push.height) != (self.push.src_width, self.push.src_height)
+    }
+
+    /// Whether bounce `bounce` (1-based) records `radiance.gather`: bounce 1, and on the working
+    /// grid every bounce (a later bounce's from the total plane, where the previous indirect
+    /// shade left its exit radiance); at full resolution that shade wrote level 0 itself.
+    pub fn gathers(&self, bounce: u32) -> bool {
+        bounce == 1 || self.on_working_grid()
+    }
+
+    /// Records the gather of bounce `bounce`'s input (stage `radiance.gather`): the direct
+    /// planes for bounce 1, the total plane for a later one.
+    pub fn record_gather(&self, rec: &mut Recorder, bounce: u32) {
         rec.scope(STAGE_GATHER, |ctx, cmd| {
-            let push = self.push;
+            let plane = if bounce > 1 { PLANE_TOTAL } else { PLANE_DIRECT };
+            let push = GatherPush { plane, ..self.push };
             let g =
                 [groups(push.width, crate::constants::WORKGROUP), groups(push.height, crate::constants::WORKGROUP), 1];
             self.gather.dispatch(ctx, cmd, self.set, bytemuck::bytes_of(&push), g);

@@ -219,7 +219,7 @@ impl Renderer {
             Stage::VisibilityBlockers => self.blockers.iter().for_each(|b| b.record(rec)),
             Stage::ShadeDirect => self.shade.record(rec),
             Stage::ShadeLocalLights => self.local.iter().for_each(|l| l.record(rec)),
-            Stage::RadianceGather(_) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec)),
+            Stage::RadianceGather(b) => ind.into_iter().for_each(|i| i.radiance.record_gather(rec, b)),
             Stage::RadianceDecimate(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_decimate(rec)),
             Stage::RadianceSynthesize(_) => ind.into_iter().for_each(|i| i.radiance.pyramid.record_synthesize(rec)),
             Stage::IndirectScan(b) => ind.into_iter().for_each(|i| i.record_scan(rec, b)),
@@ -365,7 +365,9 @@ impl Renderer {
     ///   bounce's shade left for a next bounce, the coarser levels that bounce's own input),
     ///   `radiance.stack` (stack mode), `indirect.u` (the last bounce's `U`) and `indirect.next`
     ///   (channels 0–2 of level 0 as rgb per texel: the radiance the last bounce leaves for a
-    ///   next one).
+    ///   next one). A sub-sampled scalar pyramid's level 0 is the working grid and holds the
+    ///   last bounce's input instead: its shades pass the exit radiance on through the total
+    ///   plane ([`crate::rules::scene::radiance_base`]).
     ///
     /// Call after a recorded frame has completed (before it, buffers that no frame wrote yet
     /// hold undefined values). For tests and debugging; not part of a frame.

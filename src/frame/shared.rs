@@ -289,7 +289,9 @@ pub struct ShadePush {
     /// Indirect mode: the pre-exposure `U` is stored at ([`crate::frame::storage::pre_exposure`]);
     /// the shade reads `U / u_scale`. 1 in direct mode.
     pub u_scale: f32,
-    pub pad: [u32; 3],
+    /// Indirect mode: where the exit radiance goes (`NEXT_LEVEL0`, `NEXT_TOTAL`, `NEXT_NONE`).
+    pub next_mode: u32,
+    pub pad: [u32; 2],
     /// Camera position, split as `camera + camera_lo` (two f32 per coordinate, the f64
     /// position to ~48 bits) so that the view vector `(camera − P) + camera_lo` keeps its
     /// precision when the heights are far from 0 (docs/hard-cases.md).
@@ -349,8 +351,25 @@ pub struct GatherPush {
     /// 1: the shading buffer has the glossy planes (`shade::planes`), and bounce 1 adds the
     /// direct glossy plane (scalar pyramid).
     pub glossy: u32,
-    pub pad: [u32; 2],
+    /// The shading planes' size (the field's); `width × height` is level 0's, the working grid
+    /// when it is smaller ([`crate::rules::scene::radiance_base`]): each level-0 texel is then
+    /// the mean of the field texels in its cell.
+    pub src_width: u32,
+    pub src_height: u32,
+    /// The shading plane read (`PLANE_DIRECT` for bounce 1; `PLANE_TOTAL` for a later bounce of
+    /// a working-grid pyramid, where the previous indirect shade left its exit radiance).
+    pub plane: u32,
+    pub pad: [u32; 3],
 }
+
+/// `ShadePush::next_mode`: where the indirect shade writes its bounce's exit radiance, the next
+/// bounce's input (docs/indirect.md §1). Level 0 of the radiance pyramid (full-resolution base).
+pub const NEXT_LEVEL0: u32 = 0;
+/// The total plane, which `radiance.gather` averages to the working grid (working-grid base; a
+/// bounce that is not the last: the last one writes the total there).
+pub const NEXT_TOTAL: u32 = 1;
+/// Nowhere (working-grid base, the last bounce).
+pub const NEXT_NONE: u32 = 2;
 
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
 const _: () = assert!(std::mem::offset_of!(IndirectPush, specular) == 48);
@@ -364,7 +383,7 @@ const _: () = assert!(std::mem::offset_of!(SweepPush, texel_size) == 32);
 const _: () = assert!(std::mem::offset_of!(SweepPush, hull_capacity) == 36);
 const _: () = assert!(std::mem::offset_of!(SweepPush, reach) == 40);
 const _: () = assert!(std::mem::offset_of!(VisibilityPush, sweep_near) == 52);
-const _: () = assert!(std::mem::size_of::<GatherPush>() == 32);
+const _: () = assert!(std::mem::size_of::<GatherPush>() == 48);
 
 /// `hfgi_ViewPush`: push constants of the view raster pass (vertex stage).
 #[repr(C)]
@@ -551,6 +570,7 @@ mod layout_against_glsl {
             sphere_count,
             key_overlap,
             u_scale,
+            next_mode,
             camera,
             specular,
             albedo,
@@ -606,7 +626,7 @@ mod layout_against_glsl {
             radiance_planes,
             radiance_scale
         });
-        layout!(GatherPush { width, height, channel_stride, vector, n2, glossy });
+        layout!(GatherPush { width, height, channel_stride, vector, n2, glossy, src_width, src_height, plane });
         layout!(ViewPush { view_proj, width, height, texel_size, eye, eye_lo });
         layout!(WaterPush { width, height, wrap, drop_count, k, retain, rest_level, scale, drops });
         layout!(TruthPush {

@@ -8,6 +8,7 @@ pub use super::tangent::{omega_min, receiver_normal};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
 use crate::math::{elevation, zh};
+use crate::rules::scene::{radiance_base, radiance_cell};
 use crate::scene::model::{Level0, OmegaMin, PyramidMode, Scene};
 use glam::DVec3;
 
@@ -107,11 +108,18 @@ struct RadianceSource {
     levels: Vec<usize>,
     /// `gi.level0 = "bilinear"`: level 0 is the unfiltered image.
     raw0: bool,
+    /// The field's size and the pyramid's level-0 grid ([`radiance_base`]), when they differ:
+    /// positions are mapped from the one to the other.
+    to_base: Option<((usize, usize), (usize, usize))>,
 }
 
 impl RadianceSource {
     fn at(&self, channel: usize, level: usize, q: [f64; 2]) -> f64 {
         let c = &self.channels[channel];
+        let q = match self.to_base {
+            Some(((w, h), (bw, bh))) => [rescale(q[0], w, bw), rescale(q[1], h, bh)],
+            None => q,
+        };
         if self.raw0 && level == 0 {
             c.sample_raw(0, q[0], q[1])
         } else {
@@ -150,6 +158,22 @@ fn member_radiance(
     rad
 }
 
+/// The mean of the `size` texels in each cell of a `base` grid ([`radiance_cell`]): level 0 of
+/// a sub-sampled scene's radiance pyramid (docs/indirect.md §1).
+fn average_to(data: &[f64], size: (usize, usize), base: (usize, usize)) -> Vec<f64> {
+    let mut sum = vec![0.0; base.0 * base.1];
+    let mut count = vec![0u32; base.0 * base.1];
+    for y in 0..size.1 {
+        let row = radiance_cell(y, size.1, base.1) * base.0;
+        for x in 0..size.0 {
+            let cell = row + radiance_cell(x, size.0, base.0);
+            sum[cell] += data[y * size.0 + x];
+            count[cell] += 1;
+        }
+    }
+    sum.iter().zip(&count).map(|(s, &n)| if n == 0 { 0.0 } else { s / n as f64 }).collect()
+}
+
 /// Direct light plus `scene.gi.bounces` indirect bounces on the CPU.
 pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let direct = render_direct(scene)?;
@@ -172,7 +196,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let nrm = normals(scene);
     let tri = crate::math::triple::triple(n);
     let n_v = pyr.layout.count();
-    let big_n = w.max(h) as f64;
+    let base = radiance_base(scene);
 
     // Bounce 0: the direct light. Scalar pyramid: diffuse + glossy toward the camera; vector
     // pyramid: diffuse + the incident SH radiance T (true pyramid always).
@@ -203,14 +227,20 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
         let mode_stack = stack && !vector;
         let channels: Vec<CpuPyramid> = images
             .into_iter()
-            .map(|data| CpuPyramid::build_f64(data, (w, h), work, gi.radiance_level_step, scene.wrap, mode_stack))
+            .map(|data| {
+                let data = if base == (w, h) { data } else { average_to(&data, (w, h), base) };
+                CpuPyramid::build_f64(data, base, work, gi.radiance_level_step, scene.wrap, mode_stack)
+            })
             .collect::<Result<_>>()?;
         let n_u = channels[0].layout.count();
+        // The ladder's steps in the base grid's texels (docs/indirect.md §2).
+        let n_base = base.0.max(base.1) as f64;
         let levels: Vec<usize> = scan_steps(gi, n_v)
             .into_iter()
-            .map(|tau| radiance_level(big_n * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u))
+            .map(|tau| radiance_level(n_base * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u))
             .collect();
-        let src = RadianceSource { channels, levels, raw0: gi.level0 == Level0::Bilinear };
+        let to_base = (base != (w, h)).then_some(((w, h), base));
+        let src = RadianceSource { channels, levels, raw0: gi.level0 == Level0::Bilinear, to_base };
         // U at every receiver, per channel (eq. 19–21).
         let u_grid: Vec<[Vec<f64>; 3]> = (0..work.0 * work.1)
             .map(|r| {

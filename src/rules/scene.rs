@@ -70,6 +70,28 @@ pub fn vector_pyramid(scene: &Scene) -> bool {
         && scene.material.specular.is_some_and(|k| k.iter().any(|v| *v != 0.0))
 }
 
+/// The grid level 0 of the (scalar) radiance pyramid covers (docs/indirect.md §1, "Sub-sampled
+/// radiance"): with `gi.subsample > 1` the working grid, whose texel averages the exit radiance
+/// of the field texels in its cell ([`radiance_cell`]); the field otherwise, and always for the
+/// glossy vector pyramid (its incident SH vectors are not averaged). The scans read the
+/// pyramid at the working resolution, so the field-resolution levels finer than it only ever
+/// reached them point-sampled; a working-grid base holds `s²` times fewer texels.
+pub fn radiance_base(scene: &Scene) -> (usize, usize) {
+    let (w, h) = (scene.field.width(), scene.field.height());
+    if scene.gi.subsample > 1 && !vector_pyramid(scene) {
+        scene.gi.working_size(w, h)
+    } else {
+        (w, h)
+    }
+}
+
+/// The cell of a `to`-texel grid that texel `x` of a `from`-texel row falls in (texel centres,
+/// domain edges aligned, as [`crate::reference::pyramid::rescale`]): `⌊(2x + 1)·to / (2·from)⌋`,
+/// in integers. With `from = s·to` cell `c` holds texels `s·c … s·c + s − 1`.
+pub fn radiance_cell(x: usize, from: usize, to: usize) -> usize {
+    ((2 * x + 1) * to / (2 * from)).min(to - 1)
+}
+
 /// The diffuse lobe of `gi.diffuse_lobe` as order-n ZH (the shading's, GPU and twin):
 /// [`crate::math::zh::clamped_cosine`] or [`crate::math::zh::cosine`].
 pub fn diffuse_lobe(n: usize, lobe: crate::scene::model::DiffuseLobe) -> Vec<f64> {
