@@ -14,7 +14,8 @@
 //! - `visibility.environment` only with a non-zero environment (some SH coefficient ≠ 0),
 //!   `visibility.key_lights` only with key lights;
 //! - `shade.direct`, then per bounce `b = 1..B`: `radiance.gather` (bounce 1 only: the shade
-//!   of bounce `b − 1` writes the next bounce's level 0), `radiance.decimate`,
+//!   of bounce `b − 1` writes the next bounce's level 0; every bounce when a sub-sampled scalar
+//!   pyramid starts at the working grid, docs/indirect.md §1), `radiance.decimate`,
 //!   `radiance.synthesize` (stack mode and scalar radiance pyramid only), `indirect.scan`,
 //!   `indirect.shade` — the indirect stages only with `gi.bounces > 0` and a surface that
 //!   reflects light (albedo or specular non-zero);

@@ -9,8 +9,9 @@
 //! buffer in between). A sub-sampled scalar pyramid's level 0 is the working grid
 //! ([`crate::rules::scene::radiance_base`]): the gather averages each cell's field texels, and
 //! for `b > 1` it reads the total plane, where the indirect shade of bounce `b − 1` left its
-//! exit radiance (the last bounce's shade writes the total there). Output: the levels (and stack) buffers of
-//! [`RadiancePyramid::pyramid`], table entries with `source = 1`.
+//! exit radiance (the last bounce's shade writes the total there).
+//! Output: the levels (and stack) buffers of [`RadiancePyramid::pyramid`], table entries with
+//! `source = 1`.
 //! Barriers: compute→compute after each stage.
 
 use ash::vk;

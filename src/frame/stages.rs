@@ -66,7 +66,7 @@ pub const STAGES: &[StageInfo] = &[
     row(
         "radiance.gather",
         "RadiancePyramid (IndirectPass)",
-        "as radiance.decimate, for bounce 1 only (the indirect shade of bounce b writes bounce b + 1's level 0)",
+        "as radiance.decimate, for bounce 1 only (the indirect shade of bounce b writes bounce b + 1's level 0), or every bounce when sub-sampled (level 0 is the working grid)",
         true,
     ),
     row(
