@@ -24,6 +24,15 @@ pub const PLANES: u32 = 6;
 /// Planes in the shading buffer of a diffuse surface: total, direct, indirect.
 pub const PLANES_DIFFUSE: u32 = 3;
 
+/// `ShadePush::next_mode`: where the indirect shade writes its bounce's exit radiance, the next
+/// bounce's input (docs/indirect.md §1). Level 0 of the radiance pyramid (full-resolution base).
+pub const NEXT_LEVEL0: u32 = 0;
+/// The total plane, which `radiance.gather` averages to the working grid (working-grid base; a
+/// bounce that is not the last: the last one writes the total there).
+pub const NEXT_TOTAL: u32 = 1;
+/// Nowhere (working-grid base, the last bounce).
+pub const NEXT_NONE: u32 = 2;
+
 /// Entries per order of the optimal-linear SH exponentiation's `a`, `b` tables
 /// (`math::shexp::OL_POINTS`, checked equal there).
 pub const OL_POINTS: u32 = 49;
@@ -52,6 +61,9 @@ pub const GLSL_DEFINES: &[(&str, u32, bool)] = &[
     ("PLANE_GLOSSY_INDIRECT", PLANE_GLOSSY_INDIRECT, true),
     ("PLANES", PLANES, true),
     ("PLANES_DIFFUSE", PLANES_DIFFUSE, true),
+    ("NEXT_LEVEL0", NEXT_LEVEL0, true),
+    ("NEXT_TOTAL", NEXT_TOTAL, true),
+    ("NEXT_NONE", NEXT_NONE, true),
     ("OL_POINTS", OL_POINTS, false),
     ("MATCHED_INTERVALS", MATCHED_INTERVALS, false),
     ("LOCAL_GLOSSY_NODES", LOCAL_GLOSSY_NODES, true),

@@ -81,7 +81,7 @@ struct hfgi_ShadePush {
     uint sphere_count;  // sphere slots (binding 10: 2 vec4 per slot), for the key lights' shadows
     uint key_overlap;   // 1: key lights shadowed by the exact cap overlap with the spheres
     float u_scale;      // indirect mode: the pre-exposure U is stored at (hfgi_store.glsl); read as U / u_scale
-    uint next_mode;     // indirect mode: the exit radiance → 0 level 0 of the radiance pyramid, 1 the total plane, 2 nowhere
+    uint next_mode;     // indirect mode: the exit radiance → HFGI_NEXT_LEVEL0 (radiance level 0), HFGI_NEXT_TOTAL (total plane), HFGI_NEXT_NONE
     uint pad1;
     uint pad2;
     vec4 camera;        // world position of the camera (xyz), high part

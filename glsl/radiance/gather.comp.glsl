@@ -25,13 +25,11 @@ uint cell_of(uint x, uint from, uint to) {
     return min((2u * x + 1u) * to / (2u * from), to - 1u);
 }
 
-// The first texel of a `from`-texel row in cell c of a `to`-texel row: one or two before
-// ⌊c·from/to⌋, moved up while it lies in an earlier cell.
+// The first texel of a `from`-texel row in cell c of a `to`-texel row: the least x with
+// (2x + 1)·to ≥ 2c·from (cell_of(x) ≥ c), i.e. ⌈(2c·from − to) / (2·to)⌉, at least 0.
 uint cell_first(uint c, uint from, uint to) {
-    uint x = c * from / to;
-    x = x > 1u ? x - 2u : 0u;
-    while (cell_of(x, from, to) < c) ++x;
-    return x;
+    uint a = 2u * c * from;
+    return a <= to ? 0u : (a - to + 2u * to - 1u) / (2u * to);
 }
 
 // The radiance of the shading planes at texel (x, y): pc.plane, plus the direct glossy plane

@@ -301,12 +301,12 @@ void main() {
         // mixtures), or from the diffuse part alone beside T (glossy vector pyramid), written
         // here into its level 0 (W×H at offset 0 of each channel) as radiance.gather writes
         // bounce 1's: channels 0-2 the radiance, then (vector) channel 3 + 3k + c = T_k.
-        // A working-grid pyramid (pc.next_mode != 0, scalar only) gets it through the total plane:
-        // radiance.gather averages it to its level 0 (rules::scene::radiance_base).
+        // A working-grid pyramid (scalar only) gets it through the total plane, except after the
+        // last bounce: radiance.gather averages it to its level 0 (rules::scene::radiance_base).
         vec3 next = HFGI_STORE_T != 0 ? direct : direct + glossy;
-        if (pc.next_mode == 0u) {
+        if (pc.next_mode == HFGI_NEXT_LEVEL0) {
             for (uint c = 0u; c < 3u; ++c) hfgi_next[c * HFGI_NEXT_STRIDE + idx] = next[c];
-        } else if (pc.next_mode == 1u) {
+        } else if (pc.next_mode == HFGI_NEXT_TOTAL) {
             hfgi_out_set(HFGI_PLANE_TOTAL * plane + idx, next);
         }
         if (HFGI_STORE_T != 0) {
@@ -329,8 +329,8 @@ void main() {
         g = hfgi_out_get(at_gd) + hfgi_out_get(at_gi);
         hfgi_out_set(HFGI_PLANE_GLOSSY * plane + idx, g);
     }
-    // With next_mode 1 the total plane holds the next bounce's input until the last bounce.
-    if (HFGI_INDIRECT == 0 || pc.next_mode != 1u) {
+    // With HFGI_NEXT_TOTAL the total plane holds the next bounce's input until the last bounce.
+    if (HFGI_INDIRECT == 0 || pc.next_mode != HFGI_NEXT_TOTAL) {
         hfgi_out_set(HFGI_PLANE_TOTAL * plane + idx, hfgi_out_get(at_direct) + hfgi_out_get(at_indirect) + g);
     }
 }

@@ -470,13 +470,15 @@ impl Planner {
             for b in 1..=n {
                 let of = format!("gi.bounces = {n}, bounce {b} of {n}");
                 let kind = self.radiance_kind();
-                if b == 1 {
-                    let onto = if self.radiance_on_work { ", averaged to the working grid" } else { "" };
-                    let r = format!("{of}: gathers the direct exit radiance{onto} ({when})");
-                    add(&mut stages, Stage::RadianceGather(b), r);
-                    add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {kind}"));
-                } else if self.radiance_on_work {
-                    let r = format!("{of}: averages bounce {}'s exit radiance to the working grid", b - 1);
+                let gather = match (b, self.radiance_on_work) {
+                    (1, false) => Some(format!("{of}: gathers the direct exit radiance ({when})")),
+                    (1, true) => {
+                        Some(format!("{of}: gathers the direct exit radiance, averaged to the working grid ({when})"))
+                    }
+                    (_, true) => Some(format!("{of}: averages bounce {}'s exit radiance to the working grid", b - 1)),
+                    (_, false) => None,
+                };
+                if let Some(r) = gather {
                     add(&mut stages, Stage::RadianceGather(b), r);
                     add(&mut stages, Stage::RadianceDecimate(b), format!("{of}: {kind}"));
                 } else {

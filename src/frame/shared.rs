@@ -289,7 +289,8 @@ pub struct ShadePush {
     /// Indirect mode: the pre-exposure `U` is stored at ([`crate::frame::storage::pre_exposure`]);
     /// the shade reads `U / u_scale`. 1 in direct mode.
     pub u_scale: f32,
-    /// Indirect mode: where the exit radiance goes (`NEXT_LEVEL0`, `NEXT_TOTAL`, `NEXT_NONE`).
+    /// Indirect mode: where the exit radiance goes ([`crate::constants::NEXT_LEVEL0`], `NEXT_TOTAL`,
+    /// `NEXT_NONE`).
     pub next_mode: u32,
     pub pad: [u32; 2],
     /// Camera position, split as `camera + camera_lo` (two f32 per coordinate, the f64
@@ -361,15 +362,6 @@ pub struct GatherPush {
     pub plane: u32,
     pub pad: [u32; 3],
 }
-
-/// `ShadePush::next_mode`: where the indirect shade writes its bounce's exit radiance, the next
-/// bounce's input (docs/indirect.md §1). Level 0 of the radiance pyramid (full-resolution base).
-pub const NEXT_LEVEL0: u32 = 0;
-/// The total plane, which `radiance.gather` averages to the working grid (working-grid base; a
-/// bounce that is not the last: the last one writes the total there).
-pub const NEXT_TOTAL: u32 = 1;
-/// Nowhere (working-grid base, the last bounce).
-pub const NEXT_NONE: u32 = 2;
 
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
 const _: () = assert!(std::mem::offset_of!(IndirectPush, specular) == 48);
