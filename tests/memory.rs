@@ -296,6 +296,10 @@ fn estimate_512_by_subsample() {
             assert_eq!(get("hfgi.radiance.stack"), 3 * 2 * planes as u64);
             let planes = 4 * 512 * 512 + 4 * 256 * 256 + 4 * 128 * 128 + 3 * 64 * 64;
             assert_eq!(get("hfgi.pyramid.stack"), 4 * planes as u64);
+            // The radiance levels (512², 37 levels, 3 f32 channels) in the height levels buffer
+            // after level 0 (docs/pyramid.md, "Shared levels").
+            let texels: u64 = (0..37).map(|i| (512.0 * 2f64.powf(-i as f64 / 4.0)).round() as u64).map(|w| w * w).sum();
+            assert_eq!(get("hfgi.pyramid.levels"), 4 * 512 * 512 + 3 * 4 * texels);
             // Table 1 of the paper: 76 MB at 1× (issue 12).
             assert!(r.total() <= 76_000_000, "{} B", r.total());
         } else {
@@ -308,7 +312,13 @@ fn estimate_512_by_subsample() {
             let count = 4 * n.ilog2() as i32 + 1;
             let texels: u64 =
                 (0..count).map(|i| ((n as f64) * 2f64.powf(-i as f64 / 4.0)).round() as u64).map(|w| w * w).sum();
-            assert_eq!(get("hfgi.radiance.levels"), 3 * 4 * texels, "subsample {sub}");
+            // Shared levels (docs/pyramid.md): the radiance levels live in the height levels
+            // buffer after level 0 (512² f32, 1 MiB, a multiple of 256), which has room for the
+            // larger of them and the height pyramid's 36 decimated levels; no buffer of their own.
+            let height_chain: u64 =
+                (1..37).map(|i| (512.0 * 2f64.powf(-i as f64 / 4.0)).round() as u64).map(|w| 4 * w * w).sum();
+            assert_eq!(get("hfgi.pyramid.levels"), 4 * 512 * 512 + height_chain.max(3 * 4 * texels), "subsample {sub}");
+            assert!(r.buffers.iter().all(|(b, _)| b != "hfgi.radiance.levels"), "subsample {sub}");
             let stack = 23 - 4 * sub.ilog2() as u64;
             let plane = |i: u64| (n >> (i / 4)).pow(2);
             assert_eq!(get("hfgi.radiance.stack"), 3 * 2 * (0..stack).map(plane).sum::<u64>(), "subsample {sub}");
@@ -325,4 +335,53 @@ fn estimate_512_by_subsample() {
             v.total() as f64 / 1048576.0
         );
     }
+}
+
+/// `Buffer::aliasing` (the shared levels, docs/pyramid.md): a buffer bound inside another's
+/// memory allocates nothing and reads and writes the owner's bytes at its offset; a range past
+/// the owner's end is a typed error naming both buffers. In a renderer with indirect light the
+/// scalar radiance pyramid's levels alias the height levels buffer, and the vector pyramid's
+/// and pyramid mode's do not.
+#[test]
+fn an_aliasing_buffer_shares_its_owners_bytes() {
+    use hfgi::vk::{memory as vkm, Buffer};
+    let g = common::gpu();
+    let usage = hfgi::vk::raw::BufferUsageFlags::STORAGE_BUFFER
+        | hfgi::vk::raw::BufferUsageFlags::TRANSFER_DST
+        | hfgi::vk::raw::BufferUsageFlags::TRANSFER_SRC;
+    let gpu_only = gpu_allocator::MemoryLocation::GpuOnly;
+    let before = live(&g);
+    let owner = Buffer::new(&g, "test.owner", 4096, usage, gpu_only).unwrap();
+    let alias = Buffer::aliasing(&g, "test.alias", 1024, usage, &owner, 2048).unwrap();
+    let mut after = live(&g);
+    after.retain(|n, _| !before.contains_key(n));
+    assert_eq!(after.keys().collect::<Vec<_>>(), ["test.owner"], "the alias allocates nothing");
+    assert_eq!((owner.owned_bytes(), alias.owned_bytes()), (4096, 0));
+    let words: Vec<u32> = (0..256).map(|i| 0x5eed_0000 + i).collect();
+    vkm::upload(&g, &alias, 0, bytemuck::cast_slice(&words)).unwrap();
+    let seen = vkm::download(&g, &owner, 2048, 1024).unwrap();
+    assert_eq!(seen, bytemuck::cast_slice::<u32, u8>(&words), "written through the alias, read through the owner");
+    vkm::upload(&g, &owner, 2048 + 4, &[1, 2, 3, 4]).unwrap();
+    assert_eq!(vkm::download(&g, &alias, 4, 4).unwrap(), [1, 2, 3, 4], "and the other way");
+    let err = Buffer::aliasing(&g, "test.past", 1024, usage, &owner, 3328).err().expect("past the end").to_string();
+    assert!(err.contains("test.past") && err.contains("test.owner") && err.contains("4096"), "{err}");
+    alias.destroy(&g);
+    owner.destroy(&g);
+
+    let shares = |overrides: &[&str]| {
+        let scene = scene_of("", overrides);
+        let r = Renderer::new(&g, &scene).unwrap();
+        let out = r.indirect.as_ref().map(|i| i.radiance.pyramid.levels_aliased());
+        r.destroy(&g);
+        out
+    };
+    let small = ["heightfield.size=[37,50]", "gi.bounces=1"];
+    assert_eq!(shares(&small), Some(true));
+    assert_eq!(shares(&[small[0], small[1], "gi.subsample=2"]), Some(true));
+    assert_eq!(shares(&[small[0], small[1], "gi.pyramid=\"pyramid\""]), Some(false));
+    let vector = [small[0], small[1], "material.specular=[0.2,0.2,0.2]", "gi.glossy_pyramid=\"vector\""];
+    assert_eq!(shares(&vector), Some(false));
+    assert_eq!(shares(&[small[0], "gi.bounces=0"]), None);
+    let messages = common::finish(g);
+    assert!(messages.is_empty(), "validation messages: {messages:?}");
 }

@@ -424,6 +424,15 @@ fn plan_memory(scene: &hfgi::scene::model::Scene, a: &PlanArgs) -> Result<String
         mib(renderer.total()),
         mib(view.total())
     );
+    let planes = renderer.exported_planes();
+    let rest = renderer.total() - planes;
+    text += &format!(
+        "  renderer = exported shading planes {:.2} MiB + inputs and intermediates {:.2} MiB ({:.2} MB: \
+         what the paper's table 1 counts)\n",
+        mib(planes),
+        mib(rest),
+        rest as f64 / 1e6
+    );
     if a.buffers {
         let mut all = renderer.buffers.clone();
         all.sort_by(|x, y| y.1.cmp(&x.1).then_with(|| x.0.cmp(&y.0)));

@@ -17,7 +17,7 @@
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use super::pyramid::{HeightPyramid, PyramidLayout};
+use super::pyramid::{scratch_offset, HeightPyramid, LevelsMemory, PyramidLayout};
 use super::pyramid_max::{uses_max_bound, MaxPyramid};
 use super::radiance::{RadianceInputs, RadiancePyramid};
 use super::renderer::vector_pyramid;
@@ -29,7 +29,7 @@ use crate::math::azimuth;
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
 use crate::rules::scene::{radiance_base, u_coefficients};
-use crate::scene::model::{Scene, Storage};
+use crate::scene::model::{PyramidMode, Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
@@ -189,16 +189,28 @@ fn shade_set(
 }
 
 /// Bounce `b`'s radiance pyramid over the field, its stack at the working resolution `work`
-/// holding the radiance levels the scan reads.
+/// holding the radiance levels the scan reads. Its levels go into `heights`' levels buffer after
+/// level 0 where the scene allows it ([`super::radiance::shares_height_levels`]) and that buffer
+/// has the room ([`super::radiance::height_levels_tail`]; a `Renderer` makes it so), else into
+/// a buffer of their own.
 fn radiance_pyramid(
     ctx: &Context,
     scene: &Scene,
-    work: (usize, usize),
+    heights: &HeightPyramid,
     levels: &[u32],
     shade: &ShadePass,
 ) -> Result<RadiancePyramid> {
     let gi = &scene.gi;
     let n = gi.sh_order;
+    let (ww, wh) = heights.work();
+    let work = (ww as usize, wh as usize);
+    let (owner, offset) = (heights.levels_buffer(), scratch_offset(heights.layout()));
+    let tail = super::radiance::height_levels_tail(scene)?;
+    let at = if tail > 0 && offset + tail <= owner.size && heights.mode() == PyramidMode::Stack {
+        LevelsMemory::Alias { owner, offset }
+    } else {
+        LevelsMemory::Own { tail: 0 }
+    };
     RadiancePyramid::new(
         ctx,
         radiance_base(scene),
@@ -214,6 +226,7 @@ fn radiance_pyramid(
             glossy_planes: super::shade::glossy_planes(scene),
             field: (scene.field.width(), scene.field.height()),
         },
+        at,
     )
 }
 
@@ -264,7 +277,7 @@ impl IndirectPass {
             for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
                 bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
             }
-            let rad = radiance.insert(radiance_pyramid(ctx, scene, (ww as usize, wh as usize), &levels, shade)?);
+            let rad = radiance.insert(radiance_pyramid(ctx, scene, pyramid, &levels, shade)?);
             // Radiance level 0 read as the bilinear image through the stack too (with f16 storage
             // rounded to halves like every other plane of the stack; docs/performance.md §17).
             let raw0 = gi.level0 == crate::scene::model::Level0::Bilinear;

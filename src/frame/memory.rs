@@ -58,6 +58,13 @@ impl MemoryEstimate {
         self.buffers.iter().map(|(_, b)| b).sum()
     }
 
+    /// Bytes of the exported shading planes (`hfgi.shade.output`: one RGB value per field texel
+    /// and layer, docs/conventions.md). The rest of a renderer's estimate, `total() −
+    /// exported_planes()`, is its inputs and intermediates: what the paper's table 1 counts.
+    pub fn exported_planes(&self) -> u64 {
+        self.buffers.iter().filter(|(n, _)| n == shade::OUTPUT_BUFFER).map(|(_, b)| b).sum()
+    }
+
     /// The largest entry (the first of equals); `None` when empty.
     pub fn largest(&self) -> Option<&(String, u64)> {
         self.buffers.iter().rev().max_by_key(|(_, b)| *b)
@@ -102,7 +109,8 @@ pub fn renderer(scene: &Scene) -> Result<MemoryEstimate> {
     let n2 = gi.sh_order * gi.sh_order;
     let mut e = MemoryEstimate::default();
     let stack = Some(super::pyramid::height_stack_of(gi, w, h)?);
-    let heights = PyramidBuffers::new(w, h, work, gi.level_step, gi.pyramid, PyramidKind::HEIGHTS, stack, None)?;
+    let heights = PyramidBuffers::new(w, h, work, gi.level_step, gi.pyramid, PyramidKind::HEIGHTS, stack, None)?
+        .with_tail(radiance::height_levels_tail(scene)?);
     e.buffers(heights.named(PyramidKind::HEIGHTS));
     let vis = VisibilityData::new(scene);
     e.buffers(visibility::buffer_sizes(vis.samples.len(), vis.fold.len(), vis.sets.len(), work, n2, gi.storage));
@@ -134,7 +142,10 @@ fn indirect_pass(scene: &Scene, work: (usize, usize), n_v: usize) -> Result<Memo
     let kind = radiance_kind(channels, gi.storage);
     let planes = Some(indirect::radiance_stack_levels(&scan.radiance_levels(scene)?));
     let (bw, bh) = crate::rules::scene::radiance_base(scene);
-    e.buffers(PyramidBuffers::new(bw, bh, work, gi.radiance_level_step, mode, kind, planes, None)?.named(kind));
+    let rad = PyramidBuffers::new(bw, bh, work, gi.radiance_level_step, mode, kind, planes, None)?;
+    // Levels kept in the height levels buffer (radiance::shares_height_levels) allocate nothing.
+    let rad = if radiance::shares_height_levels(scene) { rad.aliased() } else { rad };
+    e.buffers(rad.named(kind));
     if uses_max_bound(scene) {
         e.buffer(pyramid_max::BUFFER_NAME, pyramid_max::buffer_bytes(&MaxLayout::new(w, h)));
     }

@@ -123,6 +123,9 @@ pub(crate) struct PyramidBuffers {
     pub planes: Option<Vec<[u32; 4]>>,
     /// Stack planes per channel: the finest levels kept (`1..=n_v`).
     pub stack_levels: usize,
+    /// The levels live in another pyramid's buffer ([`LevelsMemory::Alias`]): no allocation of
+    /// their own, so [`PyramidBuffers::named`] leaves them out.
+    pub levels_aliased: bool,
 }
 
 impl PyramidBuffers {
@@ -177,16 +180,65 @@ impl PyramidBuffers {
             planes: (mode == PyramidMode::Stack).then_some(planes),
             stack_levels,
             layout,
+            levels_aliased: false,
         })
     }
 
-    /// `(name, bytes)` of every buffer, in creation order.
+    /// The sizes with a levels buffer that also has room for `tail` bytes from
+    /// [`scratch_offset`] on, where an aliasing pyramid's levels go ([`LevelsMemory::Own`]).
+    pub(crate) fn with_tail(mut self, tail: u64) -> Self {
+        if tail > 0 {
+            self.levels = self.levels.max(scratch_offset(&self.layout) + tail);
+        }
+        self
+    }
+
+    /// The sizes of a pyramid whose levels alias another's ([`LevelsMemory::Alias`]).
+    pub(crate) fn aliased(mut self) -> Self {
+        self.levels_aliased = true;
+        self
+    }
+
+    /// `(name, bytes)` of every buffer that allocates memory, in creation order.
     pub(crate) fn named(&self, kind: PyramidKind) -> Vec<(String, u64)> {
-        let mut out = vec![(buffer_name(kind, "levels"), self.levels), (buffer_name(kind, "table"), self.table)];
+        let mut out = Vec::new();
+        if !self.levels_aliased {
+            out.push((buffer_name(kind, "levels"), self.levels));
+        }
+        out.push((buffer_name(kind, "table"), self.table));
         out.extend(self.stack.map(|b| (buffer_name(kind, "stack"), b)));
         out.extend(self.planes.as_ref().map(|p| (buffer_name(kind, "planes"), (p.len() * 16) as u64)));
         out
     }
+}
+
+/// Alignment of [`scratch_offset`]: a multiple of every device's buffer alignment hfgi knows
+/// (`VkMemoryRequirements::alignment` of a storage and texel buffer, at most 256 bytes in
+/// practice; [`Buffer::aliasing`] checks it).
+pub(crate) const SCRATCH_ALIGN: u64 = 256;
+
+/// Byte offset in a one-channel pyramid's levels buffer after level 0, rounded up to
+/// [`SCRATCH_ALIGN`]: where its decimated levels begin, and where an aliasing pyramid's
+/// levels may be placed ([`LevelsMemory`]).
+pub(crate) fn scratch_offset(layout: &PyramidLayout) -> u64 {
+    let l0 = layout.levels[0];
+    (u64::from(l0.width) * u64::from(l0.height) * 4).div_ceil(SCRATCH_ALIGN) * SCRATCH_ALIGN
+}
+
+/// Where a pyramid's levels live.
+///
+/// In stack mode the levels after level 0 are only read by the pyramid's own synthesis, right
+/// after its decimation: the scans read the stack (and level 0). A renderer therefore lets the
+/// scalar radiance pyramid, whose levels are live only from `radiance.gather` to the last
+/// `indirect.shade` of a frame, keep them in the height levels buffer after level 0, which is
+/// live only from `pyramid.decimate` to `pyramid.synthesize` (docs/pyramid.md, "Shared
+/// levels"). The barriers between the stages order the two uses.
+#[derive(Clone, Copy)]
+pub enum LevelsMemory<'a> {
+    /// A buffer of its own, with room for `tail` more bytes from [`scratch_offset`] on (0: none).
+    Own { tail: u64 },
+    /// Inside `owner` from byte `offset` on, with no memory of its own ([`Buffer::aliasing`]).
+    Alias { owner: &'a Buffer, offset: u64 },
 }
 
 /// The height pyramid pass and its buffers. The same pass builds the RGB radiance pyramid
@@ -249,8 +301,30 @@ impl HeightPyramid {
         kind: PyramidKind,
         stack_levels: Option<usize>,
     ) -> Result<Self> {
+        let own = LevelsMemory::Own { tail: 0 };
+        Self::with_levels(ctx, width, height, work, k_v, mode, wrap, kind, stack_levels, own)
+    }
+
+    /// [`HeightPyramid::with_kind`] with its levels where `at` says ([`LevelsMemory`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_levels(
+        ctx: &Context,
+        width: usize,
+        height: usize,
+        work: (usize, usize),
+        k_v: u32,
+        mode: PyramidMode,
+        wrap: bool,
+        kind: PyramidKind,
+        stack_levels: Option<usize>,
+        at: LevelsMemory,
+    ) -> Result<Self> {
         let max = ctx.info().max_image_dimension_2d as usize;
         let sizes = PyramidBuffers::new(width, height, work, k_v, mode, kind, stack_levels, Some(max))?;
+        let sizes = match at {
+            LevelsMemory::Own { tail } => sizes.with_tail(tail),
+            LevelsMemory::Alias { .. } => sizes.aliased(),
+        };
         let layout = sizes.layout.clone();
         let table_entries = table_entries(&layout, kind, 0.0);
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
@@ -264,9 +338,17 @@ impl HeightPyramid {
             // Texel views: the scans, the shading and the synthesis read the levels through
             // them, the scans the stack and its planes (in pyramid mode, with no stack, the levels
             // and the table in their place).
+            let name = buffer_name(kind, "levels");
             let lv = levels.insert(
-                Buffer::new(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, MemoryLocation::GpuOnly)?
-                    .with_texel_view(ctx, vk::Format::R32_UINT)?,
+                match at {
+                    LevelsMemory::Own { .. } => {
+                        Buffer::new(ctx, &name, sizes.levels, storage, MemoryLocation::GpuOnly)?
+                    }
+                    LevelsMemory::Alias { owner, offset } => {
+                        Buffer::aliasing(ctx, &name, sizes.levels, storage, owner, offset)?
+                    }
+                }
+                .with_texel_view(ctx, vk::Format::R32_UINT)?,
             );
             let tb = table.insert(
                 Buffer::new(ctx, &buffer_name(kind, "table"), sizes.table, storage, MemoryLocation::GpuOnly)?
@@ -466,9 +548,16 @@ impl HeightPyramid {
     pub fn work(&self) -> (u32, u32) {
         self.work
     }
-    /// All decimated levels, packed (see [`PyramidLayout`]). Level 0 is the input.
+    /// All decimated levels, packed (see [`PyramidLayout`]). Level 0 is the input. A renderer's
+    /// height levels buffer may be larger: it also holds the radiance levels after level 0
+    /// ([`LevelsMemory`]).
     pub fn levels_buffer(&self) -> &Buffer {
         &self.levels
+    }
+
+    /// Whether the levels live in another pyramid's buffer ([`LevelsMemory::Alias`]).
+    pub fn levels_aliased(&self) -> bool {
+        self.levels.owned_bytes() == 0
     }
     /// The level table (`hfgi_Level[n_v]`), for passes that sample the pyramid.
     pub fn table_buffer(&self) -> &Buffer {
@@ -502,7 +591,7 @@ impl HeightPyramid {
 
     /// Bytes of GPU memory held by this mode's buffers.
     pub fn memory_bytes(&self) -> u64 {
-        self.levels.size
+        self.levels.owned_bytes()
             + self.table.size
             + self.stack.as_ref().map_or(0, |s| s.size)
             + self.planes.as_ref().map_or(0, |s| s.size)
@@ -536,7 +625,7 @@ impl HeightPyramid {
     /// Diagnostics: the whole levels buffer (every channel, [`PyramidLayout`] order; channel
     /// `c` starts at float `c·total`), read back (waits). Call after a recorded frame completed.
     pub fn read_levels_all(&self, ctx: &Context) -> Result<Vec<f32>> {
-        memory::download_f32(ctx, &self.levels, 0, self.levels.size / 4)
+        memory::download_f32(ctx, &self.levels, 0, self.layout.total * u64::from(self.kind.channels.max(1)))
     }
 
     /// Diagnostics: the whole stack buffer (`channels · stack_levels()` planes laid out as

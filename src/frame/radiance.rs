@@ -16,11 +16,13 @@
 
 use ash::vk;
 
-use super::pyramid::{HeightPyramid, PyramidKind};
+use super::plan::Planner;
+use super::pyramid::{HeightPyramid, LevelsMemory, PyramidKind, PyramidLayout};
+use super::renderer::vector_pyramid;
 use super::shared::GatherPush;
 use crate::constants::{PLANE_DIRECT, PLANE_TOTAL};
 use crate::error::Result;
-use crate::scene::model::{PyramidMode, Storage};
+use crate::scene::model::{PyramidMode, Scene, Storage};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, Buffer, ComputePipeline, Context, Recorder};
@@ -50,6 +52,24 @@ pub(crate) fn shape(mode: PyramidMode, vector_n2: Option<u32>) -> (u32, PyramidM
     }
 }
 
+/// Whether a renderer of `scene` keeps the radiance levels in the height levels buffer, after
+/// level 0 ([`LevelsMemory`]; docs/pyramid.md, "Shared levels"): both pyramids in stack mode,
+/// the scalar radiance pyramid (the vector pyramid's scan reads its levels), and indirect light.
+pub(crate) fn shares_height_levels(scene: &Scene) -> bool {
+    scene.gi.pyramid == PyramidMode::Stack && !vector_pyramid(scene) && Planner::new(scene).creates_indirect()
+}
+
+/// The bytes a renderer's height levels buffer keeps after level 0 for the radiance levels
+/// ([`super::pyramid::PyramidBuffers::with_tail`]): three `f32` channels of the radiance
+/// pyramid's levels when [`shares_height_levels`], else 0.
+pub(crate) fn height_levels_tail(scene: &Scene) -> Result<u64> {
+    if !shares_height_levels(scene) {
+        return Ok(0);
+    }
+    let (w, h) = crate::rules::scene::radiance_base(scene);
+    Ok(PyramidLayout::new(w, h, scene.gi.radiance_level_step)?.total * 4 * 3)
+}
+
 /// Where the gather reads bounce 1's input (docs/indirect.md §1).
 pub struct RadianceInputs<'a> {
     /// The shading planes (direct diffuse and direct glossy).
@@ -74,7 +94,8 @@ impl RadiancePyramid {
     /// A pyramid for a `width × height` radiance image, stack at `work`. `vector_n2`:
     /// `Some(n²)` for the glossy vector pyramid (3 + 3n² channels, always a true pyramid).
     /// `stack`: the finest levels the stack keeps per channel (those the scan reads) and how it
-    /// stores them (`gi.storage`).
+    /// stores them (`gi.storage`). `levels`: where the levels live ([`LevelsMemory`]; a renderer
+    /// puts them in its height levels buffer when [`shares_height_levels`]).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
@@ -86,11 +107,13 @@ impl RadiancePyramid {
         vector_n2: Option<u32>,
         stack: (usize, Storage),
         inputs: RadianceInputs,
+        levels: LevelsMemory,
     ) -> Result<Self> {
         let (channels, mode) = shape(mode, vector_n2);
         let (stack_levels, storage) = stack;
         let kind = radiance_kind(channels, storage);
-        let pyramid = HeightPyramid::with_kind(ctx, size.0, size.1, work, k_u, mode, wrap, kind, Some(stack_levels))?;
+        let (w, h, n) = (size.0, size.1, Some(stack_levels));
+        let pyramid = HeightPyramid::with_levels(ctx, w, h, work, k_u, mode, wrap, kind, n, levels)?;
         let binds =
             [Bind::Buffer(inputs.shade), Bind::Buffer(pyramid.levels_buffer()), Bind::Buffer(inputs.incident_direct)];
         let push_size = std::mem::size_of::<GatherPush>() as u32;

@@ -11,7 +11,7 @@ use super::indirect::IndirectPass;
 use super::live::{self, Live, RendererOptions};
 use super::local::LocalLightPass;
 use super::plan::{FrameState, Plan, Planner, Stage};
-use super::pyramid::{HeightPyramid, PyramidKind};
+use super::pyramid::{HeightPyramid, LevelsMemory, PyramidKind};
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
 use crate::error::{Error, Result};
@@ -85,8 +85,11 @@ impl Renderer {
         let gi = &scene.gi;
         let stack = Some(super::pyramid::height_stack_of(gi, w, h)?);
         let kind = PyramidKind::HEIGHTS;
-        let mut pyramid =
-            HeightPyramid::with_kind(ctx, w, h, work, gi.level_step, gi.pyramid, scene.wrap, kind, stack)?;
+        // Room after level 0 for the radiance levels where they share the buffer (docs/pyramid.md,
+        // "Shared levels").
+        let levels = LevelsMemory::Own { tail: super::radiance::height_levels_tail(scene)? };
+        let (k_v, mode) = (gi.level_step, gi.pyramid);
+        let mut pyramid = HeightPyramid::with_levels(ctx, w, h, work, k_v, mode, scene.wrap, kind, stack, levels)?;
         // Level 0 read as the bilinear surface: through the stack, where its size allows.
         pyramid.set_raw_plane0(gi.level0 == crate::scene::model::Level0::Bilinear);
         let r = pyramid
@@ -355,8 +358,11 @@ impl Renderer {
     /// Diagnostics: every intermediate GPU buffer of the frame, read back as `f32` (waits), in
     /// pipeline order, each with a name:
     ///
-    /// - `pyramid.level{i}` (level `i` of the height pyramid, `W_i × H_i`) and, in stack mode,
-    ///   `pyramid.stack{i}` (plane `i` at the working resolution, for the levels the stack keeps);
+    /// - `pyramid.level{i}` (level `i` of the height pyramid, `W_i × H_i`; level 0 alone when
+    ///   the radiance levels share the buffer after it, which a frame with indirect light
+    ///   overwrites the decimated levels with: docs/pyramid.md, "Shared levels") and, in stack
+    ///   mode, `pyramid.stack{i}` (plane `i` at the working resolution, for the levels the stack
+    ///   keeps: what the decimated levels were synthesized into);
     /// - `visibility.v.{set}` (`set` = `environment` or `key{k}`): receivers × `n²`;
     /// - `shade.{plane}` for the planes of the shading buffer (`total`, `direct`, `indirect`
     ///   and, for a glossy surface, `glossy`, `glossy_direct`, `glossy_indirect`), rgb per
@@ -374,7 +380,9 @@ impl Renderer {
     pub fn debug_buffers(&self, ctx: &Context) -> Result<Vec<(String, Vec<f32>)>> {
         use super::visibility::SetKind;
         let mut out = Vec::new();
-        for i in 0..self.pyramid.layout().count() {
+        let shared = self.indirect.as_ref().is_some_and(|i| i.radiance.pyramid.levels_aliased());
+        let levels = if shared { 1 } else { self.pyramid.layout().count() };
+        for i in 0..levels {
             out.push((format!("pyramid.level{i}"), self.pyramid.read_level(ctx, i)?));
         }
         if self.pyramid.stack_buffer().is_some() {

@@ -75,6 +75,62 @@ impl Buffer {
         Ok(Self { raw, size, name: name.to_string(), texel: vk::BufferView::null(), alloc: Some(allocation) })
     }
 
+    /// A buffer of `size` bytes placed inside `owner`'s memory at byte `offset`, with no
+    /// allocation of its own (memory aliasing): the two share those bytes, so a caller may use
+    /// them only at times when the other does not (with the barriers between). `offset` must be
+    /// a multiple of the new buffer's required alignment (256 always is, on every device hfgi
+    /// knows) and `offset + size` within `owner`. Destroying it frees no memory; destroy it before
+    /// `owner`. [`Buffer::owned_bytes`] counts it as 0.
+    pub fn aliasing(
+        ctx: &Context,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        owner: &Buffer,
+        offset: u64,
+    ) -> Result<Self> {
+        let size = size.max(4);
+        let Some(alloc) = owner.alloc.as_ref() else {
+            return Err(Error::Unsupported(format!("buffer '{name}' aliasing '{}', which owns no memory", owner.name)));
+        };
+        if offset.checked_add(size).map_or(true, |end| end > owner.size) {
+            return Err(Error::param(
+                format!("aliased buffer {name}"),
+                format!("{size} B at offset {offset}"),
+                format!("within the {} B of '{}'", owner.size, owner.name),
+            ));
+        }
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let d = ctx.device();
+        let raw = unsafe { d.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let need = unsafe { d.get_buffer_memory_requirements(raw) };
+        let have = unsafe { d.get_buffer_memory_requirements(owner.raw) };
+        let at = alloc.offset() + offset;
+        if at % need.alignment.max(1) != 0 || need.memory_type_bits & have.memory_type_bits != have.memory_type_bits {
+            unsafe { d.destroy_buffer(raw, None) };
+            return Err(Error::param(
+                format!("aliased buffer {name}"),
+                format!("offset {at} in memory types {:#x}", have.memory_type_bits),
+                format!("a multiple of {} in memory types {:#x}", need.alignment, need.memory_type_bits),
+            ));
+        }
+        if let Err(e) = unsafe { d.bind_buffer_memory(raw, alloc.memory(), at) } {
+            unsafe { d.destroy_buffer(raw, None) };
+            return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
+        }
+        ctx.set_name(raw, name);
+        Ok(Self { raw, size, name: name.to_string(), texel: vk::BufferView::null(), alloc: None })
+    }
+
+    /// The bytes this buffer allocated: its size, or 0 for one made by [`Buffer::aliasing`].
+    pub fn owned_bytes(&self) -> u64 {
+        if self.alloc.is_some() {
+            self.size
+        } else {
+            0
+        }
+    }
+
     /// The buffer with a texel view of `format` over all of it, for shaders that read it as a
     /// uniform texel buffer (`samplerBuffer`, `texelFetch`): lavapipe gathers those on its SIMD
     /// lanes, where it reads a storage buffer lane by lane (docs/performance.md §17). The buffer
