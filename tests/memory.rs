@@ -132,6 +132,10 @@ fn check(ctx: &Context, label: &str, scene: &Scene) {
     let (renderer, made) = allocated_by(ctx, || Renderer::new(ctx, scene).unwrap_or_else(|e| panic!("{label}: {e}")));
     assert_eq!(est.total(), renderer.memory_bytes(), "{label}: renderer estimate\n{est}");
     assert_eq!(names(&by_name(&est)), names(&made), "{label}: renderer buffer names");
+    // The estimate's aliases are the renderer's buffers with no memory of their own.
+    let shared = renderer.indirect.as_ref().is_some_and(|i| i.radiance.pyramid.levels_aliased());
+    let alias = ("hfgi.radiance.levels".to_string(), "hfgi.pyramid.levels".to_string());
+    assert_eq!(est.aliases, if shared { vec![alias] } else { vec![] }, "{label}: aliases");
     let largest = est.largest().unwrap();
     assert!(est.buffers.iter().all(|(_, b)| *b <= largest.1), "{label}: largest {largest:?}");
 

@@ -439,6 +439,9 @@ fn plan_memory(scene: &hfgi::scene::model::Scene, a: &PlanArgs) -> Result<String
         for (name, b) in &all {
             text += &format!("  {name:<32} {:>9.3} MiB\n", mib(*b));
         }
+        for (name, owner) in &renderer.aliases {
+            text += &format!("  {name:<32} {:>9} in {owner} (shared; docs/pyramid.md)\n", "—");
+        }
     } else if let Some((name, b)) = renderer.largest() {
         text += &format!("  largest buffer: {name} {:.2} MiB\n", mib(*b));
     }

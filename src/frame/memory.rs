@@ -31,7 +31,7 @@ use ash::vk;
 
 use super::indirect::{self, ScanData};
 use super::plan::Planner;
-use super::pyramid::{PyramidBuffers, PyramidKind};
+use super::pyramid::{buffer_name, PyramidBuffers, PyramidKind};
 use super::pyramid_max::{self, uses_max_bound};
 use super::radiance::{self, radiance_kind};
 use super::renderer::vector_pyramid;
@@ -50,6 +50,10 @@ const MIN_BUFFER_BYTES: u64 = 4;
 pub struct MemoryEstimate {
     /// `(debug name, bytes)` of each buffer or image.
     pub buffers: Vec<(String, u64)>,
+    /// `(debug name, owner's debug name)` of each buffer bound inside another's memory, which
+    /// allocates nothing and is not in [`MemoryEstimate::buffers`] (`Buffer::aliasing`; docs/
+    /// pyramid.md, "Shared levels").
+    pub aliases: Vec<(String, String)>,
 }
 
 impl MemoryEstimate {
@@ -73,6 +77,7 @@ impl MemoryEstimate {
     /// Appends `other`'s entries (e.g. the view pass after the renderer).
     pub fn append(&mut self, other: MemoryEstimate) {
         self.buffers.extend(other.buffers);
+        self.aliases.extend(other.aliases);
     }
 
     /// A buffer of `bytes` as requested from `Buffer::new` (which allocates at least 4 bytes).
@@ -146,6 +151,10 @@ fn indirect_pass(scene: &Scene, work: (usize, usize), n_v: usize) -> Result<Memo
     // Levels kept in the height levels buffer (radiance::shares_height_levels) allocate nothing.
     let rad = if radiance::shares_height_levels(scene) { rad.aliased() } else { rad };
     e.buffers(rad.named(kind));
+    if rad.levels_aliased {
+        let names = (buffer_name(kind, "levels"), buffer_name(PyramidKind::HEIGHTS, "levels"));
+        e.aliases.push(names);
+    }
     if uses_max_bound(scene) {
         e.buffer(pyramid_max::BUFFER_NAME, pyramid_max::buffer_bytes(&MaxLayout::new(w, h)));
     }

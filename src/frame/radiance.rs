@@ -113,7 +113,7 @@ impl RadiancePyramid {
         let (stack_levels, storage) = stack;
         let kind = radiance_kind(channels, storage);
         let (w, h, n) = (size.0, size.1, Some(stack_levels));
-        let pyramid = HeightPyramid::with_levels(ctx, w, h, work, k_u, mode, wrap, kind, n, levels)?;
+        let pyramid = HeightPyramid::with_kind(ctx, w, h, work, k_u, mode, wrap, kind, n, levels)?;
         let binds =
             [Bind::Buffer(inputs.shade), Bind::Buffer(pyramid.levels_buffer()), Bind::Buffer(inputs.incident_direct)];
         let push_size = std::mem::size_of::<GatherPush>() as u32;

@@ -89,7 +89,7 @@ impl Renderer {
         // "Shared levels").
         let levels = LevelsMemory::Own { tail: super::radiance::height_levels_tail(scene)? };
         let (k_v, mode) = (gi.level_step, gi.pyramid);
-        let mut pyramid = HeightPyramid::with_levels(ctx, w, h, work, k_v, mode, scene.wrap, kind, stack, levels)?;
+        let mut pyramid = HeightPyramid::with_kind(ctx, w, h, work, k_v, mode, scene.wrap, kind, stack, levels)?;
         // Level 0 read as the bilinear surface: through the stack, where its size allows.
         pyramid.set_raw_plane0(gi.level0 == crate::scene::model::Level0::Bilinear);
         let r = pyramid
