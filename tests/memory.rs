@@ -376,6 +376,8 @@ fn an_aliasing_buffer_shares_its_owners_bytes() {
         let scene = scene_of("", overrides);
         let r = Renderer::new(&g, &scene).unwrap();
         let out = r.indirect.as_ref().map(|i| i.radiance.pyramid.levels_aliased());
+        // The room after level 0 is reserved exactly when it is used.
+        assert_eq!(r.pyramid.levels_room() > 0, out == Some(true), "{overrides:?}");
         r.destroy(&g);
         out
     };
@@ -386,6 +388,11 @@ fn an_aliasing_buffer_shares_its_owners_bytes() {
     let vector = [small[0], small[1], "material.specular=[0.2,0.2,0.2]", "gi.glossy_pyramid=\"vector\""];
     assert_eq!(shares(&vector), Some(false));
     assert_eq!(shares(&[small[0], "gi.bounces=0"]), None);
+    // A standalone pyramid reserves no room, so an IndirectPass over it keeps its own levels.
+    use hfgi::frame::pyramid::{HeightPyramid, PyramidMode};
+    let alone = HeightPyramid::new(&g, 64, 64, (16, 16), 4, PyramidMode::Stack, false).unwrap();
+    assert_eq!(alone.levels_room(), 0);
+    alone.destroy(&g);
     let messages = common::finish(g);
     assert!(messages.is_empty(), "validation messages: {messages:?}");
 }

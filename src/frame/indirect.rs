@@ -190,9 +190,10 @@ fn shade_set(
 
 /// Bounce `b`'s radiance pyramid over the field, its stack at the working resolution `work`
 /// holding the radiance levels the scan reads. Its levels go into `heights`' levels buffer after
-/// level 0 where the scene allows it ([`super::radiance::shares_height_levels`]) and that buffer
-/// has the room ([`super::radiance::height_levels_tail`]; a `Renderer` makes it so), else into
-/// a buffer of their own.
+/// level 0 where the scene allows it ([`super::radiance::shares_height_levels`]) and that
+/// pyramid was created with the room for them ([`HeightPyramid::levels_room`] at least
+/// [`super::radiance::height_levels_tail`]; a `Renderer` makes it so, `HeightPyramid::new` does
+/// not), else into a buffer of their own.
 fn radiance_pyramid(
     ctx: &Context,
     scene: &Scene,
@@ -206,7 +207,8 @@ fn radiance_pyramid(
     let work = (ww as usize, wh as usize);
     let (owner, offset) = (heights.levels_buffer(), scratch_offset(heights.layout()));
     let tail = super::radiance::height_levels_tail(scene)?;
-    let at = if tail > 0 && offset + tail <= owner.size && heights.mode() == PyramidMode::Stack {
+    let room = heights.levels_room();
+    let at = if tail > 0 && tail <= room && offset + tail <= owner.size && heights.mode() == PyramidMode::Stack {
         LevelsMemory::Alias { owner, offset }
     } else {
         LevelsMemory::Own { tail: 0 }

@@ -60,6 +60,8 @@ pub struct HeightPyramid {
     stack_scale: f32,
     /// Plane 0 of the stack holds level 0's own values ([`HeightPyramid::set_raw_plane0`]).
     raw_plane0: bool,
+    /// Bytes reserved after level 0 for another pyramid's levels ([`LevelsMemory::Own`]).
+    room: u64,
     mode: PyramidMode,
     wrap: bool,
     work: (u32, u32),
@@ -193,6 +195,10 @@ impl HeightPyramid {
                 origin: 0.0,
                 stack_scale: 1.0,
                 raw_plane0: false,
+                room: match at {
+                    LevelsMemory::Own { tail } => tail,
+                    LevelsMemory::Alias { .. } => 0,
+                },
                 mode,
                 wrap,
                 work: (work.0 as u32, work.1 as u32),
@@ -344,6 +350,13 @@ impl HeightPyramid {
     /// ([`LevelsMemory`]).
     pub fn levels_buffer(&self) -> &Buffer {
         &self.levels
+    }
+
+    /// Bytes of [`HeightPyramid::levels_buffer`] reserved from [`scratch_offset`] on for another
+    /// pyramid's levels (the `tail` of [`LevelsMemory::Own`]; 0 for [`HeightPyramid::new`]). An
+    /// `IndirectPass` puts its radiance levels there only when they fit in it.
+    pub fn levels_room(&self) -> u64 {
+        self.room
     }
 
     /// Whether the levels live in another pyramid's buffer ([`LevelsMemory::Alias`]).
