@@ -47,6 +47,21 @@ pub(crate) use sizes::scratch_offset;
 pub(crate) use sizes::{buffer_name, height_stack_levels, height_stack_of, table_entries, PyramidBuffers};
 pub use sizes::{LevelsMemory, PyramidKind};
 
+/// The levels buffer where `at` says ([`LevelsMemory`]), with its texel view (`R32_UINT`).
+fn create_levels(
+    ctx: &Context,
+    name: &str,
+    bytes: u64,
+    usage: vk::BufferUsageFlags,
+    at: LevelsMemory,
+) -> Result<Buffer> {
+    let buffer = match at {
+        LevelsMemory::Own { .. } => Buffer::new(ctx, name, bytes, usage, MemoryLocation::GpuOnly)?,
+        LevelsMemory::Alias { owner, offset } => Buffer::aliasing(ctx, name, bytes, usage, owner, offset)?,
+    };
+    buffer.with_texel_view(ctx, vk::Format::R32_UINT)
+}
+
 /// The height pyramid pass and its buffers. The same pass builds the RGB radiance pyramid
 /// ([`PyramidKind`] with 3 channels): channel `c` of level `i` is table entry `c·n_v + i`, at
 /// float offset `c·total + offset_i`, and (for `i < stack_levels`) stack plane
@@ -131,18 +146,7 @@ impl HeightPyramid {
             // Texel views: the scans, the shading and the synthesis read the levels through
             // them, the scans the stack and its planes (in pyramid mode, with no stack, the levels
             // and the table in their place).
-            let name = buffer_name(kind, "levels");
-            let lv = levels.insert(
-                match at {
-                    LevelsMemory::Own { .. } => {
-                        Buffer::new(ctx, &name, sizes.levels, storage, MemoryLocation::GpuOnly)?
-                    }
-                    LevelsMemory::Alias { owner, offset } => {
-                        Buffer::aliasing(ctx, &name, sizes.levels, storage, owner, offset)?
-                    }
-                }
-                .with_texel_view(ctx, vk::Format::R32_UINT)?,
-            );
+            let lv = levels.insert(create_levels(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, at)?);
             let tb = table.insert(
                 Buffer::new(ctx, &buffer_name(kind, "table"), sizes.table, storage, MemoryLocation::GpuOnly)?
                     .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
@@ -195,10 +199,7 @@ impl HeightPyramid {
                 origin: 0.0,
                 stack_scale: 1.0,
                 raw_plane0: false,
-                room: match at {
-                    LevelsMemory::Own { tail } => tail,
-                    LevelsMemory::Alias { .. } => 0,
-                },
+                room: at.room(),
                 mode,
                 wrap,
                 work: (work.0 as u32, work.1 as u32),

@@ -210,6 +210,16 @@ pub enum LevelsMemory<'a> {
     Alias { owner: &'a Buffer, offset: u64 },
 }
 
+impl LevelsMemory<'_> {
+    /// The bytes this pyramid reserves after level 0 for another's levels (`tail`, or 0).
+    pub fn room(&self) -> u64 {
+        match self {
+            LevelsMemory::Own { tail } => *tail,
+            LevelsMemory::Alias { .. } => 0,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
