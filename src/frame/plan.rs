@@ -237,6 +237,8 @@ pub struct Planner {
     /// The radiance pyramid's level 0 is the working grid ([`crate::rules::scene::radiance_base`]):
     /// every bounce gathers.
     radiance_on_work: bool,
+    /// The radiance levels live in the height levels buffer (`radiance::shares_height_levels`).
+    shared_levels: bool,
 }
 
 /// The plan of `frame` for `scene` (`Planner::new(scene).plan(frame)`).
@@ -304,6 +306,7 @@ impl Planner {
             channels: if vector { 3 + 3 * n2 } else { 3 },
             amortize: gi.amortize,
             no_max_bound: why_no_max_bound(scene),
+            shared_levels: super::radiance::shares_height_levels(scene),
         }
     }
 

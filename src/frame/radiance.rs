@@ -16,9 +16,8 @@
 
 use ash::vk;
 
-use super::plan::Planner;
-use super::pyramid::{HeightPyramid, LevelsMemory, PyramidKind, PyramidLayout};
-use super::renderer::vector_pyramid;
+use super::pyramid::{scratch_offset, HeightPyramid, LevelsMemory, PyramidKind, PyramidLayout};
+use super::renderer::{needs_indirect, vector_pyramid};
 use super::shared::GatherPush;
 use crate::constants::{PLANE_DIRECT, PLANE_TOTAL};
 use crate::error::Result;
@@ -52,22 +51,33 @@ pub(crate) fn shape(mode: PyramidMode, vector_n2: Option<u32>) -> (u32, PyramidM
     }
 }
 
+/// The largest height levels buffer that sharing makes: 2^27 bytes, the smallest
+/// `maxStorageBufferRange` Vulkan allows. Where the shared buffer would be larger, the two
+/// pyramids keep a buffer each, so sharing never makes a buffer too large for a device that
+/// took the two (a field above about 1730² at 1×, 3450² at 2×).
+pub(crate) const SHARED_LEVELS_MAX: u64 = 1 << 27;
+
 /// Whether a renderer of `scene` keeps the radiance levels in the height levels buffer, after
 /// level 0 ([`LevelsMemory`]; docs/pyramid.md, "Shared levels"): both pyramids in stack mode,
-/// the scalar radiance pyramid (the vector pyramid's scan reads its levels), and indirect light.
+/// the scalar radiance pyramid (the vector pyramid's scan reads its levels), indirect light, and
+/// a shared buffer of at most [`SHARED_LEVELS_MAX`] bytes.
 pub(crate) fn shares_height_levels(scene: &Scene) -> bool {
-    scene.gi.pyramid == PyramidMode::Stack && !vector_pyramid(scene) && Planner::new(scene).creates_indirect()
+    height_levels_tail(scene).is_ok_and(|t| t > 0)
 }
 
 /// The bytes a renderer's height levels buffer keeps after level 0 for the radiance levels
 /// ([`super::pyramid::PyramidBuffers::with_tail`]): three `f32` channels of the radiance
 /// pyramid's levels when [`shares_height_levels`], else 0.
 pub(crate) fn height_levels_tail(scene: &Scene) -> Result<u64> {
-    if !shares_height_levels(scene) {
+    let gi = &scene.gi;
+    if gi.pyramid != PyramidMode::Stack || vector_pyramid(scene) || !needs_indirect(scene) {
         return Ok(0);
     }
     let (w, h) = crate::rules::scene::radiance_base(scene);
-    Ok(PyramidLayout::new(w, h, scene.gi.radiance_level_step)?.total * 4 * 3)
+    let tail = PyramidLayout::new(w, h, gi.radiance_level_step)?.total * 4 * 3;
+    let heights = PyramidLayout::new(scene.field.width(), scene.field.height(), gi.level_step)?;
+    let shared = (heights.total * 4).max(scratch_offset(&heights) + tail);
+    Ok(if shared <= SHARED_LEVELS_MAX { tail } else { 0 })
 }
 
 /// Where the gather reads bounce 1's input (docs/indirect.md §1).
@@ -188,5 +198,32 @@ impl RadiancePyramid {
     pub fn destroy(mut self, ctx: &Context) {
         self.gather.destroy(ctx);
         self.pyramid.destroy(ctx);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::file::parse_scene;
+
+    fn scene(overrides: &[&str]) -> Scene {
+        let o: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+        parse_scene("", std::path::Path::new("."), "test", &o).expect("scene")
+    }
+
+    /// Sharing needs the scalar pyramid in stack mode and indirect light, and stops where the
+    /// shared buffer would pass 2^27 bytes: a 2048² field at 1× (16 MiB of heights and 164 MiB
+    /// of radiance levels) keeps two buffers, the same field at 4× (10 MiB of radiance) shares.
+    #[test]
+    fn the_levels_are_shared_only_where_the_buffer_stays_within_2_to_the_27_bytes() {
+        let base = ["gi.bounces=1", "heightfield.size=64"];
+        assert!(shares_height_levels(&scene(&base)));
+        assert!(!shares_height_levels(&scene(&["gi.bounces=0", "heightfield.size=64"])));
+        assert!(!shares_height_levels(&scene(&[base[0], base[1], "gi.pyramid=\"pyramid\""])));
+        let big = ["gi.bounces=1", "heightfield.size=2048"];
+        assert!(!shares_height_levels(&scene(&big)));
+        assert!(shares_height_levels(&scene(&[big[0], big[1], "gi.subsample=4"])));
+        let tail = height_levels_tail(&scene(&[big[0], big[1], "gi.subsample=4"])).unwrap();
+        assert!(4 * 2048 * 2048 + tail <= SHARED_LEVELS_MAX, "{tail}");
     }
 }

@@ -127,13 +127,14 @@ impl Planner {
                         if self.vector { ", always a true pyramid" } else { "" },
                         self.radiance_levels,
                         self.radiance_level_step,
-                        // radiance::shares_height_levels: the scalar pyramid in stack mode.
                         if !self.vector && self.mode == PyramidMode::Stack {
-                            format!(
-                                ", a stack of the {} the scan reads; its levels kept in hfgi.pyramid.levels \
-                                 after level 0 (docs/pyramid.md, \"Shared levels\")",
-                                self.radiance_stack_levels
-                            )
+                            let shared = if self.shared_levels {
+                                "; its levels kept in hfgi.pyramid.levels after level 0 (docs/pyramid.md, \
+                                 \"Shared levels\")"
+                            } else {
+                                ""
+                            };
+                            format!(", a stack of the {} the scan reads{shared}", self.radiance_stack_levels)
                         } else {
                             String::new()
                         }
