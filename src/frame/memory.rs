@@ -147,14 +147,13 @@ fn indirect_pass(scene: &Scene, work: (usize, usize), n_v: usize) -> Result<Memo
     let kind = radiance_kind(channels, gi.storage);
     let planes = Some(indirect::radiance_stack_levels(&scan.radiance_levels(scene)?));
     let (bw, bh) = crate::rules::scene::radiance_base(scene);
-    let rad = PyramidBuffers::new(bw, bh, work, gi.radiance_level_step, mode, kind, planes, None)?;
+    let mut rad = PyramidBuffers::new(bw, bh, work, gi.radiance_level_step, mode, kind, planes, None)?;
     // Levels kept in the height levels buffer (radiance::shares_height_levels) allocate nothing.
-    let rad = if radiance::shares_height_levels(scene) { rad.aliased() } else { rad };
-    e.buffers(rad.named(kind));
-    if rad.levels_aliased {
-        let names = (buffer_name(kind, "levels"), buffer_name(PyramidKind::HEIGHTS, "levels"));
-        e.aliases.push(names);
+    if radiance::shares_height_levels(scene) {
+        rad = rad.aliased();
+        e.aliases.push((buffer_name(kind, "levels"), buffer_name(PyramidKind::HEIGHTS, "levels")));
     }
+    e.buffers(rad.named(kind));
     if uses_max_bound(scene) {
         e.buffer(pyramid_max::BUFFER_NAME, pyramid_max::buffer_bytes(&MaxLayout::new(w, h)));
     }

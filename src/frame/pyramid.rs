@@ -43,8 +43,8 @@ pub use crate::scene::model::PyramidMode;
 mod readback;
 mod sizes;
 
-pub(crate) use sizes::scratch_offset;
 pub(crate) use sizes::{buffer_name, height_stack_levels, height_stack_of, table_entries, PyramidBuffers};
+pub(crate) use sizes::{levels_with_tail, scratch_offset};
 pub use sizes::{LevelsMemory, PyramidKind};
 
 /// The levels buffer where `at` says ([`LevelsMemory`]), with its texel view (`R32_UINT`).

@@ -16,7 +16,7 @@
 
 use ash::vk;
 
-use super::pyramid::{scratch_offset, HeightPyramid, LevelsMemory, PyramidKind, PyramidLayout};
+use super::pyramid::{levels_with_tail, HeightPyramid, LevelsMemory, PyramidKind, PyramidLayout};
 use super::renderer::{needs_indirect, vector_pyramid};
 use super::shared::GatherPush;
 use crate::constants::{PLANE_DIRECT, PLANE_TOTAL};
@@ -76,7 +76,7 @@ pub(crate) fn height_levels_tail(scene: &Scene) -> Result<u64> {
     let (w, h) = crate::rules::scene::radiance_base(scene);
     let tail = PyramidLayout::new(w, h, gi.radiance_level_step)?.total * 4 * 3;
     let heights = PyramidLayout::new(scene.field.width(), scene.field.height(), gi.level_step)?;
-    let shared = (heights.total * 4).max(scratch_offset(&heights) + tail);
+    let shared = levels_with_tail(heights.total * 4, &heights, tail);
     Ok(if shared <= SHARED_LEVELS_MAX { tail } else { 0 })
 }
 

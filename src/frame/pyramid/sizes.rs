@@ -156,9 +156,7 @@ impl PyramidBuffers {
     /// The sizes with a levels buffer that also has room for `tail` bytes from
     /// [`scratch_offset`] on, where an aliasing pyramid's levels go ([`LevelsMemory::Own`]).
     pub(crate) fn with_tail(mut self, tail: u64) -> Self {
-        if tail > 0 {
-            self.levels = self.levels.max(scratch_offset(&self.layout) + tail);
-        }
+        self.levels = levels_with_tail(self.levels, &self.layout, tail);
         self
     }
 
@@ -192,6 +190,16 @@ pub(crate) const SCRATCH_ALIGN: u64 = 256;
 pub(crate) fn scratch_offset(layout: &PyramidLayout) -> u64 {
     let l0 = layout.levels[0];
     (u64::from(l0.width) * u64::from(l0.height) * 4).div_ceil(SCRATCH_ALIGN) * SCRATCH_ALIGN
+}
+
+/// Bytes of a one-channel levels buffer of `levels` bytes (`layout`'s) that also has room for
+/// `tail` bytes from [`scratch_offset`] on (none when `tail` is 0).
+pub(crate) fn levels_with_tail(levels: u64, layout: &PyramidLayout, tail: u64) -> u64 {
+    if tail > 0 {
+        levels.max(scratch_offset(layout) + tail)
+    } else {
+        levels
+    }
 }
 
 /// Where a pyramid's levels live.
