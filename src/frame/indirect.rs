@@ -247,6 +247,40 @@ const BUFFER_VIEWS: [vk::Format; 5] = [
     vk::Format::R32_UINT,
 ];
 
+/// The indirect scan's bindings 0–14 (glsl/indirect/scan.comp.glsl): the height levels, table
+/// and stack, the radiance levels, table and stack, the buffers of [`BUFFER_VIEWS`], the
+/// shading constants, the max pyramid, the radiance stack's and the height stack's planes, the
+/// recorded casting sets.
+fn scan_binds<'a>(
+    pyramid: &'a HeightPyramid,
+    rad: &'a RadiancePyramid,
+    bufs: &'a [Buffer],
+    consts: &'a Buffer,
+    max: Option<&'a MaxPyramid>,
+) -> [Bind<'a>; 15] {
+    let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
+    let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
+    [
+        Bind::Texel(pyramid.levels_buffer()),
+        Bind::Buffer(pyramid.table_buffer()),
+        Bind::Texel(hstack),
+        Bind::Texel(rad.pyramid.levels_buffer()),
+        Bind::Buffer(rad.pyramid.table_buffer()),
+        Bind::Texel(rstack),
+        Bind::Texel(&bufs[0]),
+        Bind::Texel(&bufs[1]),
+        Bind::Texel(&bufs[2]),
+        Bind::Buffer(&bufs[U]),
+        Bind::Buffer(consts),
+        // Without the bound the scan never reads binding 11: any view of 32-bit words.
+        Bind::Texel(max.map_or(&bufs[1], |m| m.buffer())),
+        // Pyramid mode has no stack and no planes: any view of uvec4s.
+        Bind::Texel(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
+        Bind::Texel(pyramid.height_planes()),
+        Bind::Buffer(&bufs[MEMBERS]),
+    ]
+}
+
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
     /// bounce's incident radiance is multiplied by it, docs/blockers.md §4).
@@ -298,28 +332,7 @@ impl IndirectPass {
             if replay {
                 memory::zero(ctx, &bufs[MEMBERS])?;
             }
-            let hstack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
-            let consts = shade.bindings()[3];
-            let rstack = rad.pyramid.stack_buffer().unwrap_or(rad.pyramid.levels_buffer());
-            let binds = [
-                Bind::Texel(pyramid.levels_buffer()),
-                Bind::Buffer(pyramid.table_buffer()),
-                Bind::Texel(hstack),
-                Bind::Texel(rad.pyramid.levels_buffer()),
-                Bind::Buffer(rad.pyramid.table_buffer()),
-                Bind::Texel(rstack),
-                Bind::Texel(&bufs[0]),
-                Bind::Texel(&bufs[1]),
-                Bind::Texel(&bufs[2]),
-                Bind::Buffer(&bufs[U]),
-                Bind::Buffer(consts),
-                // Without the bound the scan never reads binding 11: any view of 32-bit words.
-                Bind::Texel(max.as_ref().map_or(&bufs[1], |m: &MaxPyramid| m.buffer())),
-                // Pyramid mode has no stack and no planes: any view of uvec4s.
-                Bind::Texel(rad.pyramid.stack_planes_buffer().unwrap_or(&bufs[0])),
-                Bind::Texel(pyramid.height_planes()),
-                Bind::Buffer(&bufs[MEMBERS]),
-            ];
+            let binds = scan_binds(pyramid, rad, &bufs, shade.bindings()[3], max.as_ref());
             let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
             let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;
             Ok((scan_sets, shade_set, push))
@@ -329,12 +342,8 @@ impl IndirectPass {
             Err(e) => {
                 bufs.into_iter().for_each(|b| b.destroy(ctx));
                 pipes.into_iter().for_each(|mut p| p.destroy(ctx));
-                if let Some(r) = radiance {
-                    r.destroy(ctx);
-                }
-                if let Some(m) = max {
-                    m.destroy(ctx);
-                }
+                radiance.into_iter().for_each(|r| r.destroy(ctx));
+                max.into_iter().for_each(|m| m.destroy(ctx));
                 return Err(e);
             }
         };

@@ -133,67 +133,22 @@ impl HeightPyramid {
             LevelsMemory::Own { tail } => sizes.with_tail(tail),
             LevelsMemory::Alias { .. } => sizes.aliased(),
         };
-        let layout = sizes.layout.clone();
-        let table_entries = table_entries(&layout, kind, 0.0);
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
-        let (mut levels, mut table, mut stack, mut planes) = (None, None, None, None);
-        let (mut decimate, mut synthesize) = (None::<ComputePipeline>, None::<ComputePipeline>);
-        let mut sets = (vk::DescriptorSet::null(), vk::DescriptorSet::null());
-        let made = (|| -> Result<()> {
-            // Texel views: the scans, the shading and the synthesis read the levels through
-            // them, the scans the stack and its planes (in pyramid mode, with no stack, the levels
-            // and the table in their place).
-            let lv = levels.insert(create_levels(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, at)?);
-            let tb = table.insert(
-                Buffer::new(ctx, &buffer_name(kind, "table"), sizes.table, storage, MemoryLocation::GpuOnly)?
-                    .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
-            );
-            memory::upload(ctx, tb, 0, bytemuck::cast_slice(&table_entries))?;
-            let d = decimate.insert(ComputePipeline::new(
-                ctx,
-                &shaders::PYRAMID_DECIMATE_COMP,
-                &[DescriptorKind::StorageBuffer; 2],
-                PUSH_SIZE,
-                &[],
-                1,
-            )?);
-            sets.0 = d.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb)])?;
-            if let Some(stack_bytes) = sizes.stack {
-                let st = stack.insert(
-                    Buffer::new(ctx, &buffer_name(kind, "stack"), stack_bytes, storage, MemoryLocation::GpuOnly)?
-                        .with_texel_view(ctx, vk::Format::R32_UINT)?,
-                );
-                let entries = sizes.planes.as_deref().unwrap_or_default();
-                let name = buffer_name(kind, "planes");
-                let pl = planes.insert(
-                    Buffer::new(ctx, &name, (entries.len() * 16) as u64, storage, MemoryLocation::GpuOnly)?
-                        .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
-                );
-                memory::upload(ctx, pl, 0, bytemuck::cast_slice(entries))?;
-                let p = synthesize.insert(ComputePipeline::new(
-                    ctx,
-                    &shaders::PYRAMID_SYNTHESIZE_COMP,
-                    &[
-                        DescriptorKind::TexelBuffer,
-                        DescriptorKind::StorageBuffer,
-                        DescriptorKind::StorageBuffer,
-                        DescriptorKind::TexelBuffer,
-                    ],
-                    PUSH_SIZE,
-                    &[(0, kind.stack_storage.spec())],
-                    1,
-                )?);
-                let binds = [Bind::Texel(lv), Bind::Buffer(tb), Bind::Buffer(st), Bind::Texel(pl)];
-                sets.1 = p.allocate_set(ctx, &binds)?;
-            }
-            Ok(())
-        })();
-        match (made, levels, table, decimate) {
-            (Ok(()), Some(levels), Some(table), Some(decimate)) => Ok(Self {
-                layout,
+        let mut parts = Parts::default();
+        let made = parts.make(ctx, kind, &sizes, at);
+        match (made, parts) {
+            (
+                Ok(()),
+                Parts {
+                    levels: Some(levels),
+                    table: Some(table),
+                    decimate: Some(decimate),
+                    stack,
+                    planes,
+                    synthesize,
+                    sets,
+                },
+            ) => Ok(Self {
+                layout: sizes.layout,
                 stack_levels: sizes.stack_levels,
                 kind,
                 origin: 0.0,
@@ -213,13 +168,8 @@ impl HeightPyramid {
                 decimate_set: sets.0,
                 synthesize_set: sets.1,
             }),
-            (made, levels, table, decimate) => {
-                for b in [levels, table, stack, planes].into_iter().flatten() {
-                    b.destroy(ctx);
-                }
-                for mut p in [decimate, synthesize].into_iter().flatten() {
-                    p.destroy(ctx);
-                }
+            (made, parts) => {
+                parts.destroy(ctx);
                 Err(made.err().unwrap_or_else(|| Error::Unsupported("pyramid construction".into())))
             }
         }
@@ -439,6 +389,86 @@ impl HeightPyramid {
         self.table.destroy(ctx);
         for b in [self.stack, self.planes].into_iter().flatten() {
             b.destroy(ctx);
+        }
+    }
+}
+
+/// What [`HeightPyramid::with_kind`] creates, collected as it goes so that a failure destroys
+/// what exists.
+#[derive(Default)]
+struct Parts {
+    levels: Option<Buffer>,
+    table: Option<Buffer>,
+    stack: Option<Buffer>,
+    planes: Option<Buffer>,
+    decimate: Option<ComputePipeline>,
+    synthesize: Option<ComputePipeline>,
+    /// The decimation's and the synthesis' descriptor sets.
+    sets: (vk::DescriptorSet, vk::DescriptorSet),
+}
+
+impl Parts {
+    /// The levels, the table and the decimation; in stack mode the stack, its planes and the
+    /// synthesis. Texel views: the scans, the shading and the synthesis read the levels through
+    /// them, the scans the stack and its planes (in pyramid mode, with no stack, the levels and
+    /// the table in their place).
+    fn make(&mut self, ctx: &Context, kind: PyramidKind, sizes: &PyramidBuffers, at: LevelsMemory) -> Result<()> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let table_entries = table_entries(&sizes.layout, kind, 0.0);
+        let lv = self.levels.insert(create_levels(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, at)?);
+        let tb = self.table.insert(
+            Buffer::new(ctx, &buffer_name(kind, "table"), sizes.table, storage, MemoryLocation::GpuOnly)?
+                .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
+        );
+        memory::upload(ctx, tb, 0, bytemuck::cast_slice(&table_entries))?;
+        let d = self.decimate.insert(ComputePipeline::new(
+            ctx,
+            &shaders::PYRAMID_DECIMATE_COMP,
+            &[DescriptorKind::StorageBuffer; 2],
+            PUSH_SIZE,
+            &[],
+            1,
+        )?);
+        self.sets.0 = d.allocate_set(ctx, &[Bind::Buffer(lv), Bind::Buffer(tb)])?;
+        let Some(stack_bytes) = sizes.stack else { return Ok(()) };
+        let st = self.stack.insert(
+            Buffer::new(ctx, &buffer_name(kind, "stack"), stack_bytes, storage, MemoryLocation::GpuOnly)?
+                .with_texel_view(ctx, vk::Format::R32_UINT)?,
+        );
+        let entries = sizes.planes.as_deref().unwrap_or_default();
+        let name = buffer_name(kind, "planes");
+        let pl = self.planes.insert(
+            Buffer::new(ctx, &name, (entries.len() * 16) as u64, storage, MemoryLocation::GpuOnly)?
+                .with_texel_view(ctx, vk::Format::R32G32B32A32_UINT)?,
+        );
+        memory::upload(ctx, pl, 0, bytemuck::cast_slice(entries))?;
+        let p = self.synthesize.insert(ComputePipeline::new(
+            ctx,
+            &shaders::PYRAMID_SYNTHESIZE_COMP,
+            &[
+                DescriptorKind::TexelBuffer,
+                DescriptorKind::StorageBuffer,
+                DescriptorKind::StorageBuffer,
+                DescriptorKind::TexelBuffer,
+            ],
+            PUSH_SIZE,
+            &[(0, kind.stack_storage.spec())],
+            1,
+        )?);
+        let binds = [Bind::Texel(lv), Bind::Buffer(tb), Bind::Buffer(st), Bind::Texel(pl)];
+        self.sets.1 = p.allocate_set(ctx, &binds)?;
+        Ok(())
+    }
+
+    fn destroy(self, ctx: &Context) {
+        for b in [self.levels, self.table, self.stack, self.planes].into_iter().flatten() {
+            b.destroy(ctx);
+        }
+        for mut p in [self.decimate, self.synthesize].into_iter().flatten() {
+            p.destroy(ctx);
         }
     }
 }

@@ -41,10 +41,16 @@
 use std::cell::Cell;
 
 use ash::vk;
-use glam::{DMat4, DVec3, DVec4};
+use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
-use bytemuck::{Pod, Zeroable};
+mod camera;
+mod spheres;
+
+pub use camera::CameraModel;
+pub(crate) use spheres::{sphere_buffer_bytes, sphere_light_bytes, SPHERE_BUFFER, SPHERE_LIGHT_BUFFER};
+pub use spheres::{sphere_is_live, SphereLighting, SPHERE_SLICES, SPHERE_STACKS, SPHERE_VERTICES};
+use spheres::{GpuSphere, SphereDraw};
 
 use super::shared::ViewPush;
 use super::Renderer;
@@ -91,164 +97,6 @@ pub struct ViewInputs<'a> {
     /// near and far planes. Geometry outside it may be clipped; update it with
     /// [`ViewPass::set_height_range`] when the heights change range.
     pub height_range: (f32, f32),
-}
-
-/// The camera model of docs/view.md, in f64: an orthonormal basis, a reversed-depth Vulkan
-/// perspective and the near/far planes fitted to the field's bounding box.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraModel {
-    pub eye: DVec3,
-    /// Image right, image up and viewing direction, orthonormal: `right = normalize(forward ×
-    /// ẑ)` (ŷ instead of ẑ when looking straight up or down), `up = right × forward`.
-    pub right: DVec3,
-    pub up: DVec3,
-    pub forward: DVec3,
-    /// `tan(fov_y / 2)`.
-    pub tan_half_fov: f64,
-    /// Width / height in pixels.
-    pub aspect: f64,
-    pub near: f64,
-    pub far: f64,
-    pub width: u32,
-    pub height: u32,
-}
-
-impl CameraModel {
-    /// Builds the model for a `field_w × field_h` field of texel size `s` whose heights lie in
-    /// `lo..=hi`. Errors on a non-finite or degenerate camera.
-    pub fn new(camera: &Camera, field_w: usize, field_h: usize, s: f64, lo: f64, hi: f64) -> Result<Self> {
-        Self::check(camera, s)?;
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(Error::param("height range", format!("{lo}..{hi}"), "finite lo ≤ hi"));
-        }
-        let (x1, y1) = ((field_w.max(1) - 1) as f64 * s, (field_h.max(1) - 1) as f64 * s);
-        Ok(Self::fit(camera, DVec3::new(0.0, 0.0, lo), DVec3::new(x1, y1, hi), s))
-    }
-
-    /// Builds the model with the near/far planes fitted to the box `min..=max` (world
-    /// coordinates) instead of a field's box; `s` (the texel size) is the smallest extent.
-    /// [`CameraModel::new`] is this for the box `[0, (W−1)s] × [0, (H−1)s] × [lo, hi]`.
-    pub fn with_box(camera: &Camera, min: DVec3, max: DVec3, s: f64) -> Result<Self> {
-        Self::check(camera, s)?;
-        if !(min.is_finite() && max.is_finite() && min.cmple(max).all()) {
-            return Err(Error::param(
-                "view bounding box",
-                format!("{:?}..{:?}", min.to_array(), max.to_array()),
-                "finite min ≤ max",
-            ));
-        }
-        Ok(Self::fit(camera, min, max, s))
-    }
-
-    fn check(camera: &Camera, s: f64) -> Result<()> {
-        let finite3 = |v: DVec3| v.is_finite();
-        if !finite3(camera.position) || !finite3(camera.target) {
-            return Err(Error::param(
-                "camera.position/target",
-                format!("{:?} / {:?}", camera.position.to_array(), camera.target.to_array()),
-                "finite points",
-            ));
-        }
-        if (camera.target - camera.position).try_normalize().is_none() {
-            return Err(Error::param("camera.target", format!("{:?}", camera.target.to_array()), "≠ camera.position"));
-        }
-        if !(camera.fov_deg > 0.0 && camera.fov_deg < 180.0) {
-            return Err(Error::param("camera.fov_deg", camera.fov_deg, "a number in (0, 180) (degrees)"));
-        }
-        if camera.width == 0 || camera.height == 0 {
-            return Err(Error::param("camera size", format!("{}×{}", camera.width, camera.height), "at least 1×1"));
-        }
-        if !(s.is_finite() && s > 0.0) {
-            return Err(Error::param("texel_size", s, "a finite number > 0"));
-        }
-        Ok(())
-    }
-
-    /// The model for a checked camera and a finite box.
-    fn fit(camera: &Camera, min: DVec3, max: DVec3, s: f64) -> Self {
-        let forward = (camera.target - camera.position).normalize();
-        let mut right = forward.cross(DVec3::Z);
-        if right.length() < 1e-9 {
-            right = forward.cross(DVec3::Y);
-        }
-        let right = right.normalize();
-        let up = right.cross(forward);
-        let mut dmin = f64::INFINITY;
-        let mut dmax = f64::NEG_INFINITY;
-        for c in 0..8 {
-            let p = DVec3::new(
-                if c & 1 == 0 { min.x } else { max.x },
-                if c & 2 == 0 { min.y } else { max.y },
-                if c & 4 == 0 { min.z } else { max.z },
-            );
-            let z = (p - camera.position).dot(forward);
-            dmin = dmin.min(z);
-            dmax = dmax.max(z);
-        }
-        let extent = ((max.x - min.x).max(max.y - min.y) + (max.z - min.z)).max(s);
-        // Margins so that geometry exactly on the box is not clipped by rounding.
-        let far = if dmax > 0.0 { dmax * (1.0 + 1e-3) + 1e-6 * extent } else { extent };
-        let near = (dmin * (1.0 - 1e-3)).max(far * NEAR_RATIO);
-        Self {
-            eye: camera.position,
-            right,
-            up,
-            forward,
-            tan_half_fov: (camera.fov_deg.to_radians() * 0.5).tan(),
-            aspect: f64::from(camera.width) / f64::from(camera.height),
-            near,
-            far,
-            width: camera.width,
-            height: camera.height,
-        }
-    }
-
-    /// World → view: x right, y up, looking down −z.
-    pub fn view(&self) -> DMat4 {
-        let (r, u, f) = (self.right, self.up, self.forward);
-        DMat4::from_cols(
-            DVec4::new(r.x, u.x, -f.x, 0.0),
-            DVec4::new(r.y, u.y, -f.y, 0.0),
-            DVec4::new(r.z, u.z, -f.z, 0.0),
-            DVec4::new(-r.dot(self.eye), -u.dot(self.eye), f.dot(self.eye), 1.0),
-        )
-    }
-
-    /// View → clip, Vulkan conventions (NDC y down, depth in 0..1) with reversed depth: the
-    /// near plane maps to 1, the far plane to 0.
-    pub fn projection(&self) -> DMat4 {
-        let fy = 1.0 / self.tan_half_fov;
-        let (n, f) = (self.near, self.far);
-        let a = n / (f - n);
-        DMat4::from_cols(
-            DVec4::new(fy / self.aspect, 0.0, 0.0, 0.0),
-            DVec4::new(0.0, -fy, 0.0, 0.0),
-            DVec4::new(0.0, 0.0, a, -1.0),
-            DVec4::new(0.0, 0.0, a * f, 0.0),
-        )
-    }
-
-    /// World → clip.
-    pub fn view_projection(&self) -> DMat4 {
-        self.projection() * self.view()
-    }
-
-    /// Eye-relative world → clip: maps `P − eye` to clip space (`view_projection()` with the eye
-    /// at the origin). The GPU uses this form so that its f32 arithmetic never holds absolute
-    /// world coordinates times the matrix (docs/view.md).
-    pub fn eye_relative_view_projection(&self) -> DMat4 {
-        let mut rotation = self.view();
-        rotation.w_axis = DVec4::W;
-        self.projection() * rotation
-    }
-
-    /// The world-space ray through pixel position `(px, py)` (pixel centres at `+0.5`; row 0 is
-    /// the top of the image): origin and unit direction.
-    pub fn ray(&self, px: f64, py: f64) -> (DVec3, DVec3) {
-        let x = (2.0 * px / f64::from(self.width) - 1.0) * self.tan_half_fov * self.aspect;
-        let y = (1.0 - 2.0 * py / f64::from(self.height)) * self.tan_half_fov;
-        (self.eye, (self.forward + x * self.right + y * self.up).normalize())
-    }
 }
 
 /// One image the pass creates (see [`attachments`]).
@@ -310,160 +158,28 @@ pub(crate) fn index_bytes(width: usize) -> u64 {
     6 * (width as u64 - 1) * 4
 }
 
-/// Stacks (latitude bands) of the UV sphere drawn per sphere blocker (docs/view.md §6).
-pub const SPHERE_STACKS: u32 = 16;
-/// Slices (longitude bands) of the UV sphere.
-pub const SPHERE_SLICES: u32 = 32;
-/// Vertices per sphere: two triangles per quad, no index buffer.
-pub const SPHERE_VERTICES: u32 = 6 * SPHERE_STACKS * SPHERE_SLICES;
-
-/// Name of the sphere buffer (host-visible, one [`GpuSphere`] per sphere slot).
-pub(crate) const SPHERE_BUFFER: &str = "hfgi.view.spheres";
-/// Name of the sphere lighting buffer (host-visible, [`SphereLighting::bytes`]).
-pub(crate) const SPHERE_LIGHT_BUFFER: &str = "hfgi.view.sphere_light";
-
-/// Whether a sphere blocker is drawn: a finite centre, a finite radius > 0 and a centre not
-/// below `z = −1e9` (the renderer's unused slots hold a dark sphere at `z = −1e10`).
-pub fn sphere_is_live(s: &SphereBlocker) -> bool {
-    s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0 && s.center.z >= -1e9
-}
-
-/// One sphere as the view shaders read it (std430, 48 bytes; `hfgi_ViewSphere` in
-/// glsl/view/sphere.vert.glsl).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct GpuSphere {
-    /// Centre, high f32 part (xyz), radius (w).
-    center_radius: [f32; 4],
-    /// Centre, low part: `hi + lo` = the f64 centre.
-    center_lo: [f32; 4],
-    albedo: [f32; 4],
-}
-
-impl GpuSphere {
-    fn new(s: &SphereBlocker) -> Self {
-        let c = s.center.to_array();
-        let hi = c.map(|v| v as f32);
-        let lo = [0, 1, 2].map(|i| (c[i] - f64::from(hi[i])) as f32);
-        let a = s.albedo.map(|v| v as f32);
-        Self {
-            center_radius: [hi[0], hi[1], hi[2], s.radius as f32],
-            center_lo: [lo[0], lo[1], lo[2], 0.0],
-            albedo: [a[0], a[1], a[2], 0.0],
+/// The inputs [`ViewPass`] binds and the image size it renders: a field of at least 2×2, buffers
+/// large enough for it, and a camera image within the device's largest 2D image.
+fn check_inputs(ctx: &Context, width: usize, height: usize, camera: &Camera, inputs: &ViewInputs) -> Result<()> {
+    let texels = check_field_size(width, height)?;
+    for (name, buf, need) in [("heights", inputs.heights, texels * 4), ("shading", inputs.shading, texels * 12)] {
+        if buf.size < need {
+            return Err(Error::param(
+                format!("view: {name} buffer '{}' size", buf.name),
+                buf.size,
+                format!("at least {need} bytes for a {width}×{height} field"),
+            ));
         }
     }
-}
-
-/// The lighting of the view's spheres (docs/view.md §6): the environment's irradiance from its
-/// first 9 SH coefficients and each key light as a distant cap. The fragment shader multiplies
-/// them by the height field's cast shadow (an occlusion factor for the environment, a visible
-/// fraction per key light), which this host copy does not model.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SphereLighting {
-    /// Irradiance SH coefficients `Â_l · L_lm` (RGB), `k = l(l+1) + m < 9`, with `Â_0 = π`,
-    /// `Â_1 = 2π/3`, `Â_2 = π/4` (missing coefficients are 0).
-    pub env: [[f64; 3]; 9],
-    /// Per key light: the unit direction `d`, `L · 2π(1 − cos α)`, the irradiance on a
-    /// surface facing it (times `max(N·d, 0)` elsewhere), and the angular radius `α` (radians;
-    /// the width of the field-shadow ramp, docs/view.md §6).
-    pub key_lights: Vec<(DVec3, [f64; 3], f64)>,
-}
-
-impl SphereLighting {
-    /// The lighting of `environment` (n² RGB SH coefficients, CONVENTIONS.md) and `key_lights`.
-    pub fn new(environment: &Environment, key_lights: &[KeyLight]) -> Self {
-        use std::f64::consts::PI;
-        let mut env = [[0.0; 3]; 9];
-        for (k, c) in environment.sh.iter().take(9).enumerate() {
-            let a = match k {
-                0 => PI,
-                1..=3 => 2.0 * PI / 3.0,
-                _ => PI / 4.0,
-            };
-            env[k] = c.map(|v| a * v);
-        }
-        let key_lights = key_lights
-            .iter()
-            .map(|l| {
-                let solid = 2.0 * PI * (1.0 - l.angular_radius.cos());
-                (l.direction.normalize_or_zero(), l.radiance.map(|v| v * solid), l.angular_radius)
-            })
-            .collect();
-        Self { env, key_lights }
+    let max = ctx.info().max_image_dimension_2d;
+    if camera.width > max || camera.height > max {
+        return Err(Error::param(
+            "camera size",
+            format!("{}×{}", camera.width, camera.height),
+            format!("at most {max}×{max} (the device's maxImageDimension2D)"),
+        ));
     }
-
-    /// Irradiance `E(N)` at unit normal `n` without the height field's shadow (f64; what the
-    /// fragment shader evaluates in f32 where the field blocks nothing: outside the field, or
-    /// every horizon seen from the point below the lights' caps and below the horizontal).
-    pub fn irradiance(&self, n: DVec3) -> [f64; 3] {
-        let (x, y, z) = (n.x, n.y, n.z);
-        let b = [
-            0.282_094_791_773_878_1,
-            0.488_602_511_902_919_9 * y,
-            0.488_602_511_902_919_9 * z,
-            0.488_602_511_902_919_9 * x,
-            1.092_548_430_592_079_2 * x * y,
-            1.092_548_430_592_079_2 * y * z,
-            0.315_391_565_252_520_05 * (3.0 * z * z - 1.0),
-            1.092_548_430_592_079_2 * x * z,
-            0.546_274_215_296_039_6 * (x * x - y * y),
-        ];
-        let mut e = [0.0; 3];
-        for (c, bk) in self.env.iter().zip(b) {
-            (0..3).for_each(|i| e[i] += c[i] * bk);
-        }
-        for (d, l, _) in &self.key_lights {
-            let cos = n.dot(*d).max(0.0);
-            (0..3).for_each(|i| e[i] += l[i] * cos);
-        }
-        e
-    }
-
-    /// The buffer contents (std430, `Light` in glsl/view/sphere.frag.glsl): `uvec4` (x = key
-    /// lights), 9 × `vec4` coefficients, then per key light `vec4` direction (xyz) and angular
-    /// radius (w) and `vec4` irradiance.
-    fn bytes(&self) -> Vec<u8> {
-        let mut v: Vec<[f32; 4]> = Vec::with_capacity(10 + 2 * self.key_lights.len());
-        v.push(bytemuck::cast([self.key_lights.len() as u32, 0, 0, 0]));
-        v.extend(self.env.iter().map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 0.0]));
-        for (d, l, a) in &self.key_lights {
-            v.push([d.x as f32, d.y as f32, d.z as f32, *a as f32]);
-            v.push([l[0] as f32, l[1] as f32, l[2] as f32, 0.0]);
-        }
-        bytemuck::cast_slice(&v).to_vec()
-    }
-}
-
-/// Bytes of [`SPHERE_BUFFER`] for `slots` spheres.
-pub(crate) fn sphere_buffer_bytes(slots: usize) -> u64 {
-    (slots.max(1) * std::mem::size_of::<GpuSphere>()) as u64
-}
-
-/// Bytes of [`SPHERE_LIGHT_BUFFER`] for `key_lights` key lights.
-pub(crate) fn sphere_light_bytes(key_lights: usize) -> u64 {
-    (16 * (10 + 2 * key_lights)) as u64
-}
-
-/// The sphere pipeline and its buffers (only while there are or were live spheres).
-struct SphereDraw {
-    pipeline: GraphicsPipeline,
-    set: vk::DescriptorSet,
-    spheres: Buffer,
-    light: Buffer,
-    /// Spheres the buffer holds room for.
-    slots: usize,
-    /// Key lights the lighting buffer holds room for.
-    key_slots: usize,
-    /// Live spheres drawn (instances).
-    count: u32,
-}
-
-impl SphereDraw {
-    fn destroy(mut self, ctx: &Context) {
-        self.pipeline.destroy(ctx);
-        self.spheres.destroy(ctx);
-        self.light.destroy(ctx);
-    }
+    Ok(())
 }
 
 /// The view-image pass.
@@ -528,24 +244,7 @@ impl ViewPass {
         inputs: &ViewInputs,
         opts: &ViewOptions,
     ) -> Result<Self> {
-        let texels = check_field_size(width, height)?;
-        for (name, buf, need) in [("heights", inputs.heights, texels * 4), ("shading", inputs.shading, texels * 12)] {
-            if buf.size < need {
-                return Err(Error::param(
-                    format!("view: {name} buffer '{}' size", buf.name),
-                    buf.size,
-                    format!("at least {need} bytes for a {width}×{height} field"),
-                ));
-            }
-        }
-        let max = ctx.info().max_image_dimension_2d;
-        if camera.width > max || camera.height > max {
-            return Err(Error::param(
-                "camera size",
-                format!("{}×{}", camera.width, camera.height),
-                format!("at most {max}×{max} (the device's maxImageDimension2D)"),
-            ));
-        }
+        check_inputs(ctx, width, height, camera, inputs)?;
         let (lo, hi) = inputs.height_range;
         let model = CameraModel::new(camera, width, height, texel_size, f64::from(lo), f64::from(hi))?;
         let choice = graphics::choose_targets(ctx, &COLOR_FORMATS, MAX_SAMPLES, opts.samples)?;
@@ -596,12 +295,8 @@ impl ViewPass {
             Ok(s) => s,
             Err(e) => {
                 images.into_iter().for_each(|i| i.destroy(ctx));
-                if let Some(b) = index {
-                    b.destroy(ctx);
-                }
-                if let Some(mut p) = pipeline {
-                    p.destroy(ctx);
-                }
+                index.into_iter().for_each(|b| b.destroy(ctx));
+                pipeline.into_iter().for_each(|mut p| p.destroy(ctx));
                 return Err(e);
             }
         };

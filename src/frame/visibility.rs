@@ -119,6 +119,38 @@ const BINDINGS: [DescriptorKind; 8] = {
     k
 };
 
+/// The visibility scan's push constants (`sweeps`: the sweep's horizons serve the far field).
+fn visibility_push(pyramid: &HeightPyramid, scene: &Scene, sweeps: bool) -> VisibilityPush {
+    let (ww, wh) = pyramid.work();
+    VisibilityPush {
+        wrap: pyramid.wrap() as u32,
+        work_width: ww,
+        work_height: wh,
+        level_step: scene.gi.level_step,
+        level_bias: scene.gi.level_step * scene.gi.level_offset,
+        texel_size: scene.texel_size as f32,
+        stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
+        flags: super::shared::scan_flags(&scene.gi)
+            | if sweeps { FLAG_SWEEP } else { 0 }
+            | super::shared::raw_plane_flags(pyramid.raw_plane0(), false),
+        sweep_near: scene.gi.sweep_near as f32,
+        scan_extent: super::shared::scan_extent(&scene.gi),
+        ..Default::default()
+    }
+}
+
+/// The loop iterations of a receiver's ray, per azimuth (the near field's pieces with the sweep,
+/// hfgi_near_slope's guard; the ladder's samples without), plus the fold's multiply-adds.
+fn loop_cost(scene: &Scene, pyramid: &HeightPyramid, sweep: bool) -> u32 {
+    let n = scene.gi.sh_order;
+    let walk = if sweep {
+        4 * scene.gi.sweep_near as usize + 8
+    } else {
+        crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
+    };
+    (walk + n * n * elevation::gpu_size(scene.gi.elevation_basis, n)) as u32
+}
+
 impl VisibilityPass {
     /// Builds the pass for `scene` reading `pyramid`. The azimuth samples and the folded wedge
     /// matrices `A_j` are computed here in f64 and uploaded.
@@ -140,21 +172,7 @@ impl VisibilityPass {
         let mut sweep = None;
         let max_set = sets.iter().map(|s| s.count as usize).max().unwrap_or(0);
         let sweeps = scene.gi.visibility == VisibilityMethod::Sweep && max_set > 0;
-        let push = VisibilityPush {
-            wrap: pyramid.wrap() as u32,
-            work_width: ww,
-            work_height: wh,
-            level_step: scene.gi.level_step,
-            level_bias: scene.gi.level_step * scene.gi.level_offset,
-            texel_size: scene.texel_size as f32,
-            stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
-            flags: super::shared::scan_flags(&scene.gi)
-                | if sweeps { FLAG_SWEEP } else { 0 }
-                | super::shared::raw_plane_flags(pyramid.raw_plane0(), false),
-            sweep_near: scene.gi.sweep_near as f32,
-            scan_extent: super::shared::scan_extent(&scene.gi),
-            ..Default::default()
-        };
+        let push = visibility_push(pyramid, scene, sweeps);
         let made = (|| -> Result<vk::DescriptorSet> {
             // Texel views (docs/performance.md §17): the samples and the fold's padded rows as
             // uvec4s (§19), V as words (written here as a storage buffer, read by shade.direct through the view).
@@ -206,12 +224,8 @@ impl VisibilityPass {
             Ok(d) => d,
             Err(e) => {
                 parts.into_iter().for_each(|b| b.destroy(ctx));
-                if let Some(mut p) = pipeline {
-                    p.destroy(ctx);
-                }
-                if let Some(s) = sweep {
-                    s.destroy(ctx);
-                }
+                pipeline.into_iter().for_each(|mut p| p.destroy(ctx));
+                sweep.into_iter().for_each(|s| s.destroy(ctx));
                 return Err(e);
             }
         };
@@ -228,11 +242,7 @@ impl VisibilityPass {
             n,
             storage,
             push,
-            loop_cost: (if sweep.is_some() {
-                4 * scene.gi.sweep_near as usize + 8 // the near field's pieces (hfgi_near_slope's guard)
-            } else {
-                crate::reference::direct::scan_steps(&scene.gi, pyramid.layout().count()).len()
-            } + n2 * elevation::gpu_size(scene.gi.elevation_basis, n)) as u32,
+            loop_cost: loop_cost(scene, pyramid, sweep.is_some()),
             sweep,
             key_offsets,
         })

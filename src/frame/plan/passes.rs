@@ -23,6 +23,13 @@ impl Planner {
 
     /// The passes `Renderer::new` creates (and the ones it does not), with reasons.
     pub fn passes(&self) -> Vec<PlannedPass> {
+        let mut passes = self.direct_passes();
+        passes.extend(self.indirect_passes());
+        passes
+    }
+
+    /// The height pyramid, the visibility and the shading, and the optional direct passes.
+    fn direct_passes(&self) -> Vec<PlannedPass> {
         let (w, h) = self.size;
         let (ww, wh) = self.work;
         let storage = match self.mode {
@@ -43,7 +50,7 @@ impl Planner {
             sets.push(format!("{} key light{}", self.key_lights, plural(self.key_lights)));
         }
         let sets = if sets.is_empty() { "no environment or key light".into() } else { sets.join(", ") };
-        let mut passes = vec![
+        vec![
             PlannedPass {
                 name: "HeightPyramid",
                 created: true,
@@ -93,7 +100,12 @@ impl Planner {
                     "no local lights".into()
                 },
             },
-        ];
+        ]
+    }
+
+    /// The indirect pass and the pyramids it owns, or why there are none.
+    fn indirect_passes(&self) -> Vec<PlannedPass> {
+        let mut passes = Vec::new();
         match self.no_indirect() {
             Some(why) => {
                 passes.push(PlannedPass { name: "IndirectPass", created: false, reason: why.clone() });
