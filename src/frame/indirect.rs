@@ -91,7 +91,7 @@ impl ScanData {
         let own_later = later != first; // whatever gi.bounces: a host may record more bounces
         let (mut samples, mut fold) = (Vec::new(), Vec::new());
         for m in if own_later { vec![first, later] } else { vec![first] } {
-            let set = azimuth::environment_set(m as usize, gi.interpolation);
+            let set = azimuth::environment_set(m as usize, gi.azimuth_offset, gi.interpolation);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
             fold.extend(super::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
         }

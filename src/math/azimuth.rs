@@ -57,10 +57,11 @@ fn complete_set(phi0: f64, count: usize, lo: f64, hi: f64, interp: Interpolation
     AzimuthSet { phi, lo, hi, wedges, complete: true }
 }
 
-/// The environment: `m` samples `φ_j = 2πj/m` and `m` wedges over the whole circle, elevation
-/// window `[−π/2, π/2]`.
-pub fn environment_set(m: usize, interp: Interpolation) -> AzimuthSet {
-    complete_set(0.0, m, -FRAC_PI_2, FRAC_PI_2, interp)
+/// The environment: `m` samples `φ_j = 2π(j + offset)/m` and `m` wedges over the whole circle,
+/// elevation window `[−π/2, π/2]`. `offset` (in wedges, `gi.azimuth_offset`) rotates the set: 0
+/// is the paper's `φ_j = 2πj/m`, with rays along the grid's axes and diagonals.
+pub fn environment_set(m: usize, offset: f64, interp: Interpolation) -> AzimuthSet {
+    complete_set(offset * 2.0 * PI / m as f64, m, -FRAC_PI_2, FRAC_PI_2, interp)
 }
 
 /// A key light (§6): `k` samples over the light's azimuthal extent and its elevation window.
@@ -183,7 +184,7 @@ mod tests {
         ];
         for n in [3, 4, 6] {
             for interp in [Interpolation::Linear, Interpolation::Bspline] {
-                let mut sets = vec![environment_set(8, interp), environment_set(32, interp)];
+                let mut sets = vec![environment_set(8, 0.0, interp), environment_set(32, 0.0, interp)];
                 sets.extend(lights.iter().map(|l| key_light_set(l, 3, interp)));
                 sets.push(key_light_set(&lights[0], 5, interp));
                 for (set, basis) in sets.iter().flat_map(|s| [(s, ElevationBasis::Nlp), (s, ElevationBasis::Legendre)])
@@ -211,8 +212,13 @@ mod tests {
     fn legendre_basis_projects_exactly() {
         use crate::math::quadrature::gauss_legendre_on;
         let n = 4;
-        for interp in [Interpolation::Linear, Interpolation::Bspline] {
-            let set = environment_set(8, interp);
+        // The paper's set and one rotated by half a wedge (gi.azimuth_offset): the z-rotations
+        // follow the samples wherever they are.
+        for (interp, offset) in
+            [Interpolation::Linear, Interpolation::Bspline].into_iter().flat_map(|i| [(i, 0.0), (i, 0.5)])
+        {
+            let set = environment_set(8, offset, interp);
+            assert!((set.phi[0] - offset * PI / 4.0).abs() < 1e-15 && (set.wedges[0].start - set.phi[0]).abs() < 1e-15);
             let horizon: Vec<f64> = (0..8).map(|j| 0.9 * ((j * 5) as f64 * 0.7).sin() - 0.1).collect();
             let brute = {
                 let mut v = vec![0.0; n * n];
@@ -245,9 +251,9 @@ mod tests {
                 got.iter().zip(&brute).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max)
             };
             let (exact, paper) = (err(ElevationBasis::Legendre), err(ElevationBasis::Nlp));
-            eprintln!("{interp}: max |V − brute force|: legendre {exact:.1e}, nlp {paper:.1e}");
-            assert!(exact < 1e-11, "{interp}: legendre basis off by {exact:e}");
-            assert!(paper > 1e-4, "{interp}: the NLP floor should be visible here ({paper:e})");
+            eprintln!("{interp}, offset {offset}: max |V − brute force|: legendre {exact:.1e}, nlp {paper:.1e}");
+            assert!(exact < 1e-11, "{interp}, offset {offset}: legendre basis off by {exact:e}");
+            assert!(paper > 1e-4, "{interp}, offset {offset}: the NLP floor should be visible here ({paper:e})");
         }
     }
 

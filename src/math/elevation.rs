@@ -256,8 +256,8 @@ mod tests {
         for n in 1..=8usize {
             for interp in [Interpolation::Linear, Interpolation::Bspline] {
                 for set in [
-                    azimuth::environment_set(32, interp),
-                    azimuth::environment_set(7, interp),
+                    azimuth::environment_set(32, 0.0, interp),
+                    azimuth::environment_set(7, 0.0, interp),
                     azimuth::key_light_set(&light, 3, interp),
                 ] {
                     for a in azimuth::fold(n, &set, interp, ElevationBasis::Legendre) {

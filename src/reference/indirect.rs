@@ -6,7 +6,9 @@ use super::direct::{interpolate, normals, render_direct, scan_steps, DirectOutpu
 use super::pyramid::{rescale, CpuPyramid};
 pub use super::tangent::{omega_min, receiver_normal};
 use crate::error::Result;
-use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices};
+use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices, AzimuthSet};
+use crate::math::triple::Triple;
+use crate::math::wedge::Mat;
 use crate::math::{elevation, zh};
 use crate::rules::scene::{radiance_base, radiance_cell};
 use crate::scene::model::{Level0, OmegaMin, PyramidMode, Scene};
@@ -188,7 +190,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let tangent = gi.omega_min == OmegaMin::Tangent;
     // The first bounce's azimuth set and the later bounces' (`gi.azimuths_later`).
     let sets = [1, 2].map(|b| {
-        let set = environment_set(gi.scan_azimuths(b) as usize, gi.interpolation);
+        let set = environment_set(gi.scan_azimuths(b) as usize, gi.azimuth_offset, gi.interpolation);
         let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
         (set, mats)
     });
@@ -196,7 +198,6 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let nrm = normals(scene);
     let tri = crate::math::triple::triple(n);
     let n_v = pyr.layout.count();
-    let base = radiance_base(scene);
 
     // Bounce 0: the direct light. Scalar pyramid: diffuse + glossy toward the camera; vector
     // pyramid: diffuse + the incident SH radiance T (true pyramid always).
@@ -210,7 +211,6 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let mut glossy_bounces = Vec::new();
     for bounce in 1..=gi.bounces {
         scan.probes = gi.probes(bounce) as usize;
-        let (set, mats) = &sets[(bounce > 1) as usize];
         let mut images: Vec<Vec<f64>> = if vector {
             (0..3).map(|c| diffuse_src.iter().map(|v| v[c]).collect()).collect()
         } else {
@@ -224,62 +224,10 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
                 }
             }
         }
-        let mode_stack = stack && !vector;
-        let channels: Vec<CpuPyramid> = images
-            .into_iter()
-            .map(|data| {
-                let data = if base == (w, h) { data } else { average_to(&data, (w, h), base) };
-                CpuPyramid::build_f64(data, base, work, gi.radiance_level_step, scene.wrap, mode_stack)
-            })
-            .collect::<Result<_>>()?;
-        let n_u = channels[0].layout.count();
-        // The ladder's steps in the base grid's texels (docs/indirect.md §2).
-        let n_base = base.0.max(base.1) as f64;
-        let levels: Vec<usize> = scan_steps(gi, n_v)
-            .into_iter()
-            .map(|tau| radiance_level(n_base * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u))
-            .collect();
-        let to_base = (base != (w, h)).then_some(((w, h), base));
-        let src = RadianceSource { channels, levels, raw0: gi.level0 == Level0::Bilinear, to_base };
-        // U at every receiver, per channel (eq. 19–21).
-        let u_grid: Vec<[Vec<f64>; 3]> = (0..work.0 * work.1)
-            .map(|r| {
-                let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
-                let normal = receiver_normal(scene, p);
-                let per_phi: Vec<[Vec<f64>; 3]> = set
-                    .phi
-                    .iter()
-                    .map(|&phi| {
-                        let mut rad = |i, q, omega| member_radiance(scene, &src, &lobes.phong, i, q, omega, phi);
-                        scan_radiance(&scan, n, p, phi, normal, tangent, &mut rad)
-                    })
-                    .collect();
-                [0, 1, 2].map(|c| {
-                    let v: Vec<Vec<f64>> = per_phi.iter().map(|u| u[c].clone()).collect();
-                    accumulate_with(n, set, mats, &v)
-                })
-            })
-            .collect();
-        let channels: [Vec<Vec<f64>>; 3] = [0, 1, 2].map(|c| u_grid.iter().map(|u| u[c].clone()).collect());
+        let src = radiance_source(scene, images, work, n_v, stack && !vector)?;
+        let channels = u_grid(scene, &scan, &src, &sets[(bounce > 1) as usize], &lobes, work, tangent);
         drop(src);
-        let mut diffuse = Vec::with_capacity(w * h);
-        let mut glossy = Vec::with_capacity(w * h);
-        let mut next_incident = Vec::with_capacity(w * h);
-        for y in 0..h {
-            for x in 0..w {
-                let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
-                let uc: Vec<Vec<f64>> = channels.iter().map(|c| interpolate(c, work, xw, yw, scene.wrap)).collect();
-                let mut tr: Vec<[f64; 3]> = (0..n * n).map(|k| [uc[0][k], uc[1][k], uc[2][k]]).collect();
-                if let Some(b) = &direct.blockers {
-                    // The sphere blockers shade the bounce light too (docs/blockers.md §4).
-                    tr = super::blockers::times(tri, &tr, &interpolate(b, work, xw, yw, scene.wrap));
-                }
-                let (d, g) = lobes.shade(scene, x, y, nrm[y * w + x], &tr);
-                diffuse.push(d);
-                glossy.push(g);
-                next_incident.push(tr);
-            }
-        }
+        let (diffuse, glossy, next_incident) = shade_bounce(scene, &direct, &lobes, &nrm, tri, &channels, work);
         diffuse_src = diffuse.clone();
         glossy_src = glossy.clone();
         incident = next_incident;
@@ -301,4 +249,105 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let glossy = sum(direct.glossy.clone(), &glossy_bounces);
     let total = sum(direct.direct.clone(), &[indirect.clone(), glossy.clone()]);
     Ok(GiOutput { direct, indirect_bounces, glossy_bounces, indirect, glossy, total })
+}
+
+/// The radiance pyramid a bounce reads (docs/indirect.md §1–2): the exit-radiance `images` (RGB,
+/// then in vector mode the incident SH coefficients), averaged to the radiance base grid where it
+/// is the working grid, decimated, with the ladder's radiance level per scan sample.
+fn radiance_source(
+    scene: &Scene,
+    images: Vec<Vec<f64>>,
+    work: (usize, usize),
+    n_v: usize,
+    mode_stack: bool,
+) -> Result<RadianceSource> {
+    let gi = &scene.gi;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let base = radiance_base(scene);
+    let channels: Vec<CpuPyramid> = images
+        .into_iter()
+        .map(|data| {
+            let data = if base == (w, h) { data } else { average_to(&data, (w, h), base) };
+            CpuPyramid::build_f64(data, base, work, gi.radiance_level_step, scene.wrap, mode_stack)
+        })
+        .collect::<Result<_>>()?;
+    let n_u = channels[0].layout.count();
+    // The ladder's steps in the base grid's texels (docs/indirect.md §2).
+    let n_base = base.0.max(base.1) as f64;
+    let levels: Vec<usize> = scan_steps(gi, n_v)
+        .into_iter()
+        .map(|tau| radiance_level(n_base * tau, gi.radiance_level_step, gi.radiance_level_offset, n_u))
+        .collect();
+    let to_base = (base != (w, h)).then_some(((w, h), base));
+    Ok(RadianceSource { channels, levels, raw0: gi.level0 == Level0::Bilinear, to_base })
+}
+
+/// U at every receiver of the working grid, per channel (eq. 19–21), over the azimuth set `set`
+/// with its wedge matrices.
+fn u_grid(
+    scene: &Scene,
+    scan: &Scan,
+    src: &RadianceSource,
+    (set, mats): &(AzimuthSet, Vec<Mat>),
+    lobes: &Lobes,
+    work: (usize, usize),
+    tangent: bool,
+) -> [Vec<Vec<f64>>; 3] {
+    let n = scene.gi.sh_order;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let u_grid: Vec<[Vec<f64>; 3]> = (0..work.0 * work.1)
+        .map(|r| {
+            let p = [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
+            let normal = receiver_normal(scene, p);
+            let per_phi: Vec<[Vec<f64>; 3]> = set
+                .phi
+                .iter()
+                .map(|&phi| {
+                    let mut rad = |i, q, omega| member_radiance(scene, src, &lobes.phong, i, q, omega, phi);
+                    scan_radiance(scan, n, p, phi, normal, tangent, &mut rad)
+                })
+                .collect();
+            [0, 1, 2].map(|c| {
+                let v: Vec<Vec<f64>> = per_phi.iter().map(|u| u[c].clone()).collect();
+                accumulate_with(n, set, mats, &v)
+            })
+        })
+        .collect();
+    [0, 1, 2].map(|c| u_grid.iter().map(|u| u[c].clone()).collect())
+}
+
+/// A bounce's shading at every texel from U (`channels`, interpolated from the working grid),
+/// times the sphere blockers' visibility where there are blockers: the diffuse and glossy exit
+/// radiance and the incident SH radiance.
+#[allow(clippy::type_complexity)]
+fn shade_bounce(
+    scene: &Scene,
+    direct: &DirectOutput,
+    lobes: &Lobes,
+    nrm: &[[f64; 3]],
+    tri: &Triple,
+    channels: &[Vec<Vec<f64>>; 3],
+    work: (usize, usize),
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<Vec<[f64; 3]>>) {
+    let n = scene.gi.sh_order;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    let mut diffuse = Vec::with_capacity(w * h);
+    let mut glossy = Vec::with_capacity(w * h);
+    let mut incident = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
+            let uc: Vec<Vec<f64>> = channels.iter().map(|c| interpolate(c, work, xw, yw, scene.wrap)).collect();
+            let mut tr: Vec<[f64; 3]> = (0..n * n).map(|k| [uc[0][k], uc[1][k], uc[2][k]]).collect();
+            if let Some(b) = &direct.blockers {
+                // The sphere blockers shade the bounce light too (docs/blockers.md §4).
+                tr = super::blockers::times(tri, &tr, &interpolate(b, work, xw, yw, scene.wrap));
+            }
+            let (d, g) = lobes.shade(scene, x, y, nrm[y * w + x], &tr);
+            diffuse.push(d);
+            glossy.push(g);
+            incident.push(tr);
+        }
+    }
+    (diffuse, glossy, incident)
 }

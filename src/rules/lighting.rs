@@ -30,7 +30,10 @@ pub fn light_sets_with(scene: &Scene, environment: bool) -> Vec<(SetKind, Azimut
     let gi = &scene.gi;
     let mut sets = Vec::new();
     if environment {
-        sets.push((SetKind::Environment, azimuth::environment_set(gi.azimuths as usize, gi.interpolation)));
+        sets.push((
+            SetKind::Environment,
+            azimuth::environment_set(gi.azimuths as usize, gi.azimuth_offset, gi.interpolation),
+        ));
     }
     for (i, l) in scene.key_lights.iter().enumerate() {
         sets.push((SetKind::KeyLight(i), azimuth::key_light_set(l, gi.key_light_azimuths as usize, gi.interpolation)));
