@@ -380,20 +380,6 @@ fn wedges_rotated_and_summed_match_full_projection() {
     }
 }
 
-/// m_bspl(8, ·) timing (printed with `--nocapture`); a generous sanity bound of 1 s.
-#[test]
-fn m_bspl_timing() {
-    let reps = 20;
-    let t0 = std::time::Instant::now();
-    let mut acc = 0.0;
-    for i in 0..reps {
-        acc += wedge::m_bspl(8, 2.0 * PI / 32.0 + i as f64 * 1e-3).data.iter().map(|x| x.abs()).sum::<f64>();
-    }
-    let per = t0.elapsed().as_secs_f64() / reps as f64;
-    eprintln!("m_bspl(8, ·): {:.3} ms per call (checksum {acc:e})", per * 1e3);
-    assert!(per < 1.0);
-}
-
 // ---------------------------------------------------------------------------------------------
 // 4. Rotations
 // ---------------------------------------------------------------------------------------------
