@@ -25,7 +25,6 @@ use super::shade::ShadePass;
 use super::shared::{IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND};
 use crate::constants::{NEXT_LEVEL0, NEXT_NONE, NEXT_TOTAL};
 use crate::error::Result;
-use crate::math::azimuth;
 use crate::reference::direct::scan_steps;
 use crate::reference::indirect::radiance_level;
 use crate::rules::scene::{radiance_base, u_coefficients};
@@ -91,7 +90,7 @@ impl ScanData {
         let own_later = later != first; // whatever gi.bounces: a host may record more bounces
         let (mut samples, mut fold) = (Vec::new(), Vec::new());
         for m in if own_later { vec![first, later] } else { vec![first] } {
-            let set = azimuth::environment_set(m as usize, gi.azimuth_offset, gi.interpolation);
+            let set = crate::rules::lighting::environment_set(gi, m);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
             fold.extend(super::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
         }

@@ -6,7 +6,7 @@ use super::direct::{interpolate, normals, render_direct, scan_steps, DirectOutpu
 use super::pyramid::{rescale, CpuPyramid};
 pub use super::tangent::{omega_min, receiver_normal};
 use crate::error::Result;
-use crate::math::azimuth::{accumulate_with, environment_set, wedge_matrices, AzimuthSet};
+use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
 use crate::math::triple::Triple;
 use crate::math::wedge::Mat;
 use crate::math::{elevation, zh};
@@ -190,7 +190,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let tangent = gi.omega_min == OmegaMin::Tangent;
     // The first bounce's azimuth set and the later bounces' (`gi.azimuths_later`).
     let sets = [1, 2].map(|b| {
-        let set = environment_set(gi.scan_azimuths(b) as usize, gi.azimuth_offset, gi.interpolation);
+        let set = crate::rules::lighting::environment_set(gi, gi.scan_azimuths(b));
         let mats = wedge_matrices(n, &set, gi.interpolation, gi.elevation_basis);
         (set, mats)
     });

@@ -5,7 +5,7 @@
 use std::f64::consts::PI;
 
 use crate::math::azimuth::{self, AzimuthSet};
-use crate::scene::model::Scene;
+use crate::scene::model::{GiSettings, Scene};
 
 /// Which light a set of azimuth samples belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,6 +19,13 @@ pub fn has_environment(scene: &Scene) -> bool {
     scene.environment.sh.iter().any(|c| c.iter().any(|v| *v != 0.0))
 }
 
+/// The environment's azimuth set with `m` samples as `gi` turns it (`gi.azimuth_offset`): the
+/// set of the environment's visibility (`m = gi.azimuths`) and of every indirect scan
+/// (`gi.scan_azimuths(b)`), on the GPU and in the twins alike (docs/direct.md §4).
+pub fn environment_set(gi: &GiSettings, m: u32) -> AzimuthSet {
+    azimuth::environment_set(m as usize, gi.azimuth_offset, gi.interpolation)
+}
+
 /// The light sets of a scene with their azimuth samples (docs/direct.md §4).
 pub fn light_sets(scene: &Scene) -> Vec<(SetKind, AzimuthSet)> {
     light_sets_with(scene, has_environment(scene))
@@ -30,10 +37,7 @@ pub fn light_sets_with(scene: &Scene, environment: bool) -> Vec<(SetKind, Azimut
     let gi = &scene.gi;
     let mut sets = Vec::new();
     if environment {
-        sets.push((
-            SetKind::Environment,
-            azimuth::environment_set(gi.azimuths as usize, gi.azimuth_offset, gi.interpolation),
-        ));
+        sets.push((SetKind::Environment, environment_set(gi, gi.azimuths)));
     }
     for (i, l) in scene.key_lights.iter().enumerate() {
         sets.push((SetKind::KeyLight(i), azimuth::key_light_set(l, gi.key_light_azimuths as usize, gi.interpolation)));
