@@ -13,8 +13,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use hfgi::frame::view::{ViewOptions, ViewPass};
-use hfgi::frame::Renderer;
+use hfgi::frame::{Renderer, ShadingLayers};
 use hfgi::scene::animated::Animation;
+use hfgi::scene::model::Scene;
 use hfgi::vk::{Context, ContextOptions, Recorder, StageTimer};
 
 /// Real-time global illumination on dynamic height fields (Nowrouzezahrai & Snyder 2009), on Vulkan.
@@ -274,7 +275,7 @@ fn render(a: RenderArgs) -> Result<()> {
         gi.interpolation,
         gi.pyramid
     );
-    let mut renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
+    let renderer = Renderer::new(&ctx, &scene).context("creating the renderer")?;
     let view = match ViewPass::for_renderer(&ctx, &scene, &renderer, &ViewOptions::default()) {
         Ok(v) => v,
         Err(e) => {
@@ -284,6 +285,20 @@ fn render(a: RenderArgs) -> Result<()> {
     };
     let (vw, vh) = view.size();
     eprintln!("view: {vw}×{vh}, {}× MSAA, {:?}", view.samples(), view.color_format());
+    let (layers, image) = render_frames(&ctx, &scene, renderer, view)?;
+    ctx.check_validation()?;
+    let (vw, vh) = (vw as usize, vh as usize);
+    write_render_outputs(&a, &scene, &layers, (vw, vh, &image), exposure)
+}
+
+/// Renders the frames of `hfgi render` and prints their stage times and the GPU memory; then
+/// destroys `renderer` and `view` (also on failure). The shading layers and the view image.
+fn render_frames(
+    ctx: &Context,
+    scene: &Scene,
+    mut renderer: Renderer,
+    view: ViewPass,
+) -> Result<(ShadingLayers, Vec<[f32; 3]>)> {
     // Two GI frames of the same passes (the second with the heights marked changed, so that
     // amortisation does not halve it): the first pays each pipeline's first-dispatch compilation
     // on drivers that compile lazily (lavapipe), the second is the frame's time. Then the view,
@@ -292,36 +307,46 @@ fn render(a: RenderArgs) -> Result<()> {
     let capacity = 32 + 5 * scene.gi.bounces;
     let mut timers: Vec<StageTimer> = Vec::new();
     let made = (0..3).try_for_each(|k| -> Result<()> {
-        timers.push(StageTimer::new(&ctx, if k < 2 { capacity } else { 2 })?);
+        timers.push(StageTimer::new(ctx, if k < 2 { capacity } else { 2 })?);
         Ok(())
     });
     let run = made.and_then(|_| {
         let [first, warm, raster] = &mut timers[..] else { unreachable!("three timers") };
-        record_timed(&ctx, first, |rec| renderer.record(rec))?;
+        record_timed(ctx, first, |rec| renderer.record(rec))?;
         renderer.mark_heights_changed();
-        record_timed(&ctx, warm, |rec| renderer.record(rec))?;
+        record_timed(ctx, warm, |rec| renderer.record(rec))?;
         // The view pass records its own compute → vertex/fragment barrier first.
-        record_timed(&ctx, raster, |rec| view.record(rec))
+        record_timed(ctx, raster, |rec| view.record(rec))
     });
-    let read = run.and_then(|_| Ok((renderer.read_layers(&ctx)?, view.read_hdr(&ctx)?)));
+    let read = run.and_then(|_| Ok((renderer.read_layers(ctx)?, view.read_hdr(ctx)?)));
     if let [first, warm, raster] = &timers[..] {
-        print_timings(&ctx, first, warm);
-        print_single_timings(&ctx, raster);
+        print_timings(ctx, first, warm);
+        print_single_timings(ctx, raster);
     }
     eprintln!("  GPU memory: {:.2} MiB", (renderer.memory_bytes() + view.memory_bytes()) as f64 / 1048576.0);
-    view.destroy(&ctx);
-    renderer.destroy(&ctx);
-    timers.iter_mut().for_each(|t| t.destroy(&ctx));
-    let (layers, image) = read?;
-    ctx.check_validation()?;
-    let (vw, vh) = (vw as usize, vh as usize);
+    view.destroy(ctx);
+    renderer.destroy(ctx);
+    timers.iter_mut().for_each(|t| t.destroy(ctx));
+    read
+}
+
+/// Writes the outputs of `hfgi render`: the view `image` (`vw`×`vh`) and what the flags ask
+/// for of the shading `layers` and the heights.
+fn write_render_outputs(
+    a: &RenderArgs,
+    scene: &Scene,
+    layers: &ShadingLayers,
+    (vw, vh, image): (usize, usize, &[[f32; 3]]),
+    exposure: f32,
+) -> Result<()> {
+    let (w, h) = (scene.field.width(), scene.field.height());
     // Every output or none (docs/robustness.md).
     let mut wrote = Vec::new();
     hfgi::io::atomic::all_or_nothing(|| -> Result<()> {
-        hfgi::io::png::write_tonemapped(&a.out, vw, vh, &image, exposure)?;
+        hfgi::io::png::write_tonemapped(&a.out, vw, vh, image, exposure)?;
         wrote.push(a.out.display().to_string());
         if let Some(path) = &a.view_exr {
-            hfgi::io::exr::write_rgb_layers(path, vw, vh, &[("", &image)])?;
+            hfgi::io::exr::write_rgb_layers(path, vw, vh, &[("", image)])?;
             wrote.push(path.display().to_string());
         }
         if let Some(path) = &a.shading_png {

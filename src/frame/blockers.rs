@@ -210,23 +210,7 @@ impl BlockerPass {
                 }
                 bufs.push(b);
             }
-            let exp = (scene.gi.blocker_exp == BlockerExp::Linear) as u32;
-            let primal = scene.gi.blocker_shading == BlockerShading::Primal;
-            let p = pipeline.insert(ComputePipeline::new(
-                ctx,
-                &shaders::VISIBILITY_BLOCKERS_COMP,
-                &[DescriptorKind::StorageBuffer; 7],
-                std::mem::size_of::<BlockerPush>() as u32,
-                &[
-                    (0, n as u32),
-                    (1, exp),
-                    (2, log_mode(scene)),
-                    (3, primal as u32),
-                    (4, matched(scene) as u32),
-                    (5, scene.gi.storage.spec()),
-                ],
-                1,
-            )?);
+            let p = pipeline.insert(Self::create_pipeline(ctx, scene)?);
             p.allocate_set(
                 ctx,
                 &[
@@ -252,23 +236,8 @@ impl BlockerPass {
         };
         let output = bufs.pop().expect("output");
         // bufs: spheres, quad, consts, triple
-        let (ww, wh) = pyramid.work();
         debug_assert!(log_mode(scene) == 0 || vis.set_kinds().first() == Some(&SetKind::Environment));
-        let push = BlockerPush {
-            width: scene.field.width() as u32,
-            height: scene.field.height() as u32,
-            work_width: ww,
-            work_height: wh,
-            sphere_count: scene.spheres.len() as u32,
-            quad_count: q.len() as u32,
-            texel_size: scene.texel_size as f32,
-            log_eps: scene.gi.blocker_epsilon.ln() as f32,
-            ratio: scene.gi.blocker_ratio as u32,
-            env_offset: 0, // the environment set is the first set (rules::lighting::light_sets)
-            ol_step: shexp::OL_STEP as f32,
-            triple_count: triples.len() as u32,
-            ..Default::default()
-        };
+        let push = Self::push_constants(scene, pyramid.work(), q.len(), triples.len());
         let mut pass = Self {
             pipeline: pipeline.expect("pipeline"),
             descriptors,
@@ -280,6 +249,48 @@ impl BlockerPass {
         };
         pass.set_view(scene.camera.position, f64::from(scene.material.exponent));
         Ok(pass)
+    }
+
+    /// The pass's pipeline, specialised for `scene`'s order and blocker settings.
+    fn create_pipeline(ctx: &Context, scene: &Scene) -> Result<ComputePipeline> {
+        let n = scene.gi.sh_order;
+        let exp = (scene.gi.blocker_exp == BlockerExp::Linear) as u32;
+        let primal = scene.gi.blocker_shading == BlockerShading::Primal;
+        ComputePipeline::new(
+            ctx,
+            &shaders::VISIBILITY_BLOCKERS_COMP,
+            &[DescriptorKind::StorageBuffer; 7],
+            std::mem::size_of::<BlockerPush>() as u32,
+            &[
+                (0, n as u32),
+                (1, exp),
+                (2, log_mode(scene)),
+                (3, primal as u32),
+                (4, matched(scene) as u32),
+                (5, scene.gi.storage.spec()),
+            ],
+            1,
+        )
+    }
+
+    /// The push constants on the working grid `(ww, wh)`, with `quad_count` quadrature nodes
+    /// and `triple_count` triple-product entries (the view's part from [`Self::set_view`]).
+    fn push_constants(scene: &Scene, (ww, wh): (u32, u32), quad_count: usize, triple_count: usize) -> BlockerPush {
+        BlockerPush {
+            width: scene.field.width() as u32,
+            height: scene.field.height() as u32,
+            work_width: ww,
+            work_height: wh,
+            sphere_count: scene.spheres.len() as u32,
+            quad_count: quad_count as u32,
+            texel_size: scene.texel_size as f32,
+            log_eps: scene.gi.blocker_epsilon.ln() as f32,
+            ratio: scene.gi.blocker_ratio as u32,
+            env_offset: 0, // the environment set is the first set (rules::lighting::light_sets)
+            ol_step: shexp::OL_STEP as f32,
+            triple_count: triple_count as u32,
+            ..Default::default()
+        }
     }
 
     /// `log_brdf`: the camera and the Phong exponent of the glossy transfer (push constants;

@@ -80,18 +80,7 @@ impl Renderer {
         scene.gi.validate()?;
         // Also the exact lobe's restrictions (check_lobe), on the scene with the options' slots.
         scene.check_limits()?;
-        let (w, h) = (scene.field.width(), scene.field.height());
-        let work = scene.gi.working_size(w, h);
-        let gi = &scene.gi;
-        let stack = Some(super::pyramid::height_stack_of(gi, w, h)?);
-        let kind = PyramidKind::HEIGHTS;
-        // Room after level 0 for the radiance levels where they share the buffer (docs/pyramid.md,
-        // "Shared levels").
-        let levels = LevelsMemory::Own { tail: super::radiance::height_levels_tail(scene)? };
-        let (k_v, mode) = (gi.level_step, gi.pyramid);
-        let mut pyramid = HeightPyramid::with_kind(ctx, w, h, work, k_v, mode, scene.wrap, kind, stack, levels)?;
-        // Level 0 read as the bilinear surface: through the stack, where its size allows.
-        pyramid.set_raw_plane0(gi.level0 == crate::scene::model::Level0::Bilinear);
+        let mut pyramid = Self::create_pyramid(ctx, scene)?;
         let r = pyramid
             .upload(ctx, &scene.field)
             .and_then(|_| pyramid.set_origin(ctx, height_origin(&scene.field)))
@@ -103,51 +92,19 @@ impl Renderer {
                 return Err(e);
             }
         };
-        let blockers = match (!scene.spheres.is_empty())
-            .then(|| BlockerPass::new(ctx, &pyramid, &visibility, scene))
-            .transpose()
-        {
-            Ok(b) => b,
+        let (blockers, shade) = match Self::create_direct(ctx, scene, &pyramid, &visibility) {
+            Ok(d) => d,
             Err(e) => {
-                visibility.destroy(ctx);
-                pyramid.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let shade = match ShadePass::new(ctx, &pyramid, &visibility, blockers.as_ref(), scene) {
-            Ok(s) => s,
-            Err(e) => {
-                if let Some(b) = blockers {
-                    b.destroy(ctx);
-                }
                 visibility.destroy(ctx);
                 pyramid.destroy(ctx);
                 return Err(e);
             }
         };
         let planner = Planner::new(scene);
-        let local = match (!scene.local_lights.is_empty())
-            .then(|| LocalLightPass::new(ctx, &pyramid, &shade, scene))
-            .transpose()
-        {
-            Ok(l) => l,
-            Err(e) => {
-                shade.destroy(ctx);
-                if let Some(b) = blockers {
-                    b.destroy(ctx);
-                }
-                visibility.destroy(ctx);
-                pyramid.destroy(ctx);
-                return Err(e);
-            }
-        };
-        let indirect = if planner.creates_indirect() {
-            match IndirectPass::new(ctx, &pyramid, &shade, blockers.as_ref().map(|b| b.output()), scene) {
-                Ok(i) => Some(i),
+        let (local, indirect) =
+            match Self::create_local_and_indirect(ctx, scene, &pyramid, &shade, blockers.as_ref(), &planner) {
+                Ok(l) => l,
                 Err(e) => {
-                    if let Some(l) = local {
-                        l.destroy(ctx);
-                    }
                     shade.destroy(ctx);
                     if let Some(b) = blockers {
                         b.destroy(ctx);
@@ -156,10 +113,7 @@ impl Renderer {
                     pyramid.destroy(ctx);
                     return Err(e);
                 }
-            }
-        } else {
-            None
-        };
+            };
         Ok(Self {
             pyramid,
             visibility,
@@ -172,6 +126,73 @@ impl Renderer {
             stats: RendererStats::default(),
             live: Live::new(scene.clone()),
         })
+    }
+
+    /// The height pyramid of `scene`, its heights not uploaded yet.
+    fn create_pyramid(ctx: &Context, scene: &Scene) -> Result<HeightPyramid> {
+        let (w, h) = (scene.field.width(), scene.field.height());
+        let work = scene.gi.working_size(w, h);
+        let gi = &scene.gi;
+        let stack = Some(super::pyramid::height_stack_of(gi, w, h)?);
+        let kind = PyramidKind::HEIGHTS;
+        // Room after level 0 for the radiance levels where they share the buffer (docs/pyramid.md,
+        // "Shared levels").
+        let levels = LevelsMemory::Own { tail: super::radiance::height_levels_tail(scene)? };
+        let (k_v, mode) = (gi.level_step, gi.pyramid);
+        let mut pyramid = HeightPyramid::with_kind(ctx, w, h, work, k_v, mode, scene.wrap, kind, stack, levels)?;
+        // Level 0 read as the bilinear surface: through the stack, where its size allows.
+        pyramid.set_raw_plane0(gi.level0 == crate::scene::model::Level0::Bilinear);
+        Ok(pyramid)
+    }
+
+    /// The sphere blockers' pass (scenes with spheres) and the direct shade; on failure neither
+    /// is left.
+    fn create_direct(
+        ctx: &Context,
+        scene: &Scene,
+        pyramid: &HeightPyramid,
+        visibility: &VisibilityPass,
+    ) -> Result<(Option<BlockerPass>, ShadePass)> {
+        let blockers =
+            (!scene.spheres.is_empty()).then(|| BlockerPass::new(ctx, pyramid, visibility, scene)).transpose()?;
+        let shade = match ShadePass::new(ctx, pyramid, visibility, blockers.as_ref(), scene) {
+            Ok(s) => s,
+            Err(e) => {
+                if let Some(b) = blockers {
+                    b.destroy(ctx);
+                }
+                return Err(e);
+            }
+        };
+        Ok((blockers, shade))
+    }
+
+    /// The local lights' pass (scenes with local lights) and the indirect passes (where the
+    /// planner creates them); on failure neither is left.
+    fn create_local_and_indirect(
+        ctx: &Context,
+        scene: &Scene,
+        pyramid: &HeightPyramid,
+        shade: &ShadePass,
+        blockers: Option<&BlockerPass>,
+        planner: &Planner,
+    ) -> Result<(Option<LocalLightPass>, Option<IndirectPass>)> {
+        let local =
+            (!scene.local_lights.is_empty()).then(|| LocalLightPass::new(ctx, pyramid, shade, scene)).transpose()?;
+        let indirect = if planner.creates_indirect() {
+            match IndirectPass::new(ctx, pyramid, shade, blockers.map(|b| b.output()), scene) {
+                Ok(i) => Some(i),
+                Err(e) => {
+                    if let Some(l) = local {
+                        l.destroy(ctx);
+                    }
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
+        Ok((local, indirect))
     }
 
     /// Records the frame: exactly the stages of [`Renderer::plan_next`], in its order

@@ -7,10 +7,12 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use glam::DVec3;
 
+use super::blockers::BlockerVisibility;
 use super::pyramid::{rescale, CpuPyramid};
 use super::tangent::{receiver_normal, tangent_clip};
 use crate::error::Result;
 use crate::math::azimuth::{accumulate_with, wedge_matrices, AzimuthSet};
+use crate::math::triple::Triple;
 use crate::math::Mat;
 use crate::math::{elevation, triple, zh};
 use crate::rules::lighting::{light_sets, set_lighting, SetKind};
@@ -383,37 +385,7 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     let pyr = CpuPyramid::build_relative(&scene.field, z0, work, gi.level_step, scene.wrap, stack)?;
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let sets = light_sets(scene);
-    // Receiver r's level-0 position, and its normal where the visibility is clipped at the
-    // tangent plane (gi.diffuse_lobe = "exact", the GPU's HFGI_FLAG_TANGENT_CLIP): once per
-    // receiver, for every light set.
-    let receiver = |r: usize| [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
-    let clip = gi.diffuse_lobe == DiffuseLobe::Exact;
-    let clip_normals: Vec<Option<[f64; 3]>> =
-        (0..work.0 * work.1).map(|r| clip.then(|| receiver_normal(scene, receiver(r)))).collect();
-
-    // Visibility at every receiver of the working grid (§1–4), from the ladder or the sweep.
-    let visibility: Vec<Vec<Vec<f64>>> = sets
-        .iter()
-        .enumerate()
-        .map(|(si, (_, set))| {
-            let mats = wedge_matrices(n, set, gi.interpolation, gi.elevation_basis);
-            if oracle.is_none() && gi.visibility == VisibilityMethod::Sweep {
-                return sweep_visibility(&scan, n, set, &mats, work, gi.sweep_near as f64, |r| clip_normals[r]);
-            }
-            (0..work.0 * work.1)
-                .map(|r| {
-                    let (p, nrm) = (receiver(r), clip_normals[r]);
-                    visibility_from(&scan, n, set, &mats, |_, phi| {
-                        let omega = match oracle {
-                            None => scan.omega_max(p, phi),
-                            Some(hz) => hz(si, phi, p),
-                        };
-                        omega.max(tangent_clip(nrm, phi))
-                    })
-                })
-                .collect()
-        })
-        .collect();
+    let visibility = direct_visibility(scene, &scan, &sets, work, oracle);
     let lighting: Vec<Vec<[f64; 3]>> = sets.iter().map(|(k, set)| set_lighting(scene, *k, set)).collect();
 
     let t = triple::triple(n);
@@ -427,75 +399,20 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
     });
     let albedo = blockers.as_ref().and_then(|b| b.transfer.as_ref()).map(|_| super::truth::albedo(scene));
     let overlap = scene.gi.blocker_key_lights == crate::scene::model::BlockerKeyLights::Overlap;
-    let mut direct = Vec::with_capacity(w * h);
-    let mut glossy = Vec::with_capacity(w * h);
-    let mut incident = Vec::with_capacity(w * h);
-    for y in 0..h {
-        for x in 0..w {
-            let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
-            // Incident radiance T = Σ_sets L ⊛ V (§6), V interpolated from the receiver grid.
-            let mut tr = vec![[0.0f64; 3]; n * n];
-            let mut tr_env = vec![[0.0f64; 3]; n * n];
-            let mut tr_key = vec![[0.0f64; 3]; n * n];
-            for (si, (vis, light)) in visibility.iter().zip(&lighting).enumerate() {
-                let combined = blockers.as_ref().and_then(|b| b.environment.as_ref()).filter(|_| si == 0);
-                let v = interpolate(combined.unwrap_or(vis), work, xw, yw, scene.wrap);
-                // gi.blocker_key_lights = "overlap": a key light scaled by the fraction of its
-                // cap the spheres leave open, outside the product with V_s.
-                let open = match sets[si].0 {
-                    SetKind::KeyLight(i) if blockers.is_some() && overlap => Some(key_open(scene, x, y, i)),
-                    _ => None,
-                };
-                let into = if combined.is_some() {
-                    &mut tr_env
-                } else if open.is_some() {
-                    &mut tr_key
-                } else {
-                    &mut tr
-                };
-                let scale = open.unwrap_or(1.0);
-                for ch in 0..3 {
-                    let l: Vec<f64> = light.iter().map(|c| c[ch]).collect();
-                    for (k, val) in triple::product(t, &l, &v).into_iter().enumerate() {
-                        into[k][ch] += scale * val;
-                    }
-                }
-            }
-            if let Some(b) = &blockers {
-                let vs = interpolate(&b.spheres, work, xw, yw, scene.wrap);
-                tr = super::blockers::times(t, &tr, &vs);
-                for (a, (e, k)) in tr.iter_mut().zip(tr_env.iter().zip(&tr_key)) {
-                    *a = [a[0] + e[0] + k[0], a[1] + e[1] + k[1], a[2] + e[2] + k[2]];
-                }
-            }
-            let (mut d, g) = lobes.shade(scene, x, y, normals[y * w + x], &tr);
-            if let Some(t3) = blockers.as_ref().and_then(|b| b.transfer.as_ref()) {
-                // log_brdf: the environment's diffuse term from its transfer (seed 001 §5):
-                // ρ/π·(π⟨L_env, T_ρ⟩ − ⟨L_env ⊛ V', cc_N⟩).
-                let t3 = interpolate(t3, work, xw, yw, scene.wrap);
-                let cc = zh::rotate(n, &zh::clamped_cosine(n), normals[y * w + x]);
-                let rho = albedo.as_ref().map_or([0.0; 3], |a| a[y * w + x]);
-                for ch in 0..3 {
-                    let e: f64 = (0..n * n).map(|k| PI * lighting[0][k][ch] * t3[k] - tr_env[k][ch] * cc[k]).sum();
-                    d[ch] += rho[ch] / PI * e;
-                }
-            }
-            let mut g = g;
-            if let (Some(tg), Some(ks)) = (blockers.as_ref().and_then(|b| b.glossy.as_ref()), scene.material.specular) {
-                // log_brdf: the environment's glossy term from its glossy transfer (eq. 27):
-                // k_s·(⟨L_env, T_φ⟩ − ⟨L_env ⊛ V', phong_R⟩).
-                let tg = interpolate(tg, work, xw, yw, scene.wrap);
-                let gz = lobes.phong_at(scene, x, y, normals[y * w + x]);
-                for ch in 0..3 {
-                    let e: f64 = (0..n * n).map(|k| lighting[0][k][ch] * tg[k] - tr_env[k][ch] * gz[k]).sum();
-                    g[ch] += ks[ch] as f64 * e;
-                }
-            }
-            direct.push(d);
-            glossy.push(g);
-            incident.push(tr);
-        }
-    }
+    let texels = Texels {
+        scene,
+        work,
+        t,
+        sets: &sets,
+        visibility: &visibility,
+        lighting: &lighting,
+        blockers: blockers.as_ref(),
+        albedo,
+        overlap,
+        lobes,
+        normals: &normals,
+    };
+    let (mut direct, mut glossy, incident) = texels.shade();
     // The local lights' diffuse exit radiance (stage shade.local_lights, docs/local-lights.md).
     for (d, l) in direct.iter_mut().zip(super::local::local_exitance(scene, &normals)) {
         *d = [d[0] + l[0], d[1] + l[1], d[2] + l[2]];
@@ -517,4 +434,188 @@ fn render_direct_with(scene: &Scene, oracle: Option<HorizonFn>) -> Result<Direct
         incident,
         blockers: blockers.map(|b| b.spheres),
     })
+}
+
+/// Visibility at every receiver of the working grid (§1–4), per light set, from the ladder or
+/// the sweep, or from `oracle`'s horizons where there is one.
+fn direct_visibility(
+    scene: &Scene,
+    scan: &Scan,
+    sets: &[(SetKind, AzimuthSet)],
+    work: (usize, usize),
+    oracle: Option<HorizonFn>,
+) -> Vec<Vec<Vec<f64>>> {
+    let gi = &scene.gi;
+    let n = gi.sh_order;
+    let (w, h) = (scene.field.width(), scene.field.height());
+    // Receiver r's level-0 position, and its normal where the visibility is clipped at the
+    // tangent plane (gi.diffuse_lobe = "exact", the GPU's HFGI_FLAG_TANGENT_CLIP): once per
+    // receiver, for every light set.
+    let receiver = |r: usize| [rescale((r % work.0) as f64, work.0, w), rescale((r / work.0) as f64, work.1, h)];
+    let clip = gi.diffuse_lobe == DiffuseLobe::Exact;
+    let clip_normals: Vec<Option<[f64; 3]>> =
+        (0..work.0 * work.1).map(|r| clip.then(|| receiver_normal(scene, receiver(r)))).collect();
+
+    sets.iter()
+        .enumerate()
+        .map(|(si, (_, set))| {
+            let mats = wedge_matrices(n, set, gi.interpolation, gi.elevation_basis);
+            if oracle.is_none() && gi.visibility == VisibilityMethod::Sweep {
+                return sweep_visibility(scan, n, set, &mats, work, gi.sweep_near as f64, |r| clip_normals[r]);
+            }
+            (0..work.0 * work.1)
+                .map(|r| {
+                    let (p, nrm) = (receiver(r), clip_normals[r]);
+                    visibility_from(scan, n, set, &mats, |_, phi| {
+                        let omega = match oracle {
+                            None => scan.omega_max(p, phi),
+                            Some(hz) => hz(si, phi, p),
+                        };
+                        omega.max(tangent_clip(nrm, phi))
+                    })
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Everything the per-texel shading of [`render_direct_with`] shares.
+struct Texels<'a> {
+    scene: &'a Scene,
+    /// Receiver grid.
+    work: (usize, usize),
+    t: &'a Triple,
+    sets: &'a [(SetKind, AzimuthSet)],
+    /// Per light set, per receiver, `n²` values.
+    visibility: &'a [Vec<Vec<f64>>],
+    /// Per light set, `n²` RGB.
+    lighting: &'a [Vec<[f64; 3]>],
+    blockers: Option<&'a BlockerVisibility>,
+    /// The albedo per texel, where the blockers' log mode has a diffuse transfer.
+    albedo: Option<Vec<[f64; 3]>>,
+    /// `gi.blocker_key_lights = "overlap"`.
+    overlap: bool,
+    lobes: Lobes,
+    normals: &'a [[f64; 3]],
+}
+
+impl Texels<'_> {
+    /// The diffuse and glossy exit radiance and the incident SH radiance of every texel.
+    #[allow(clippy::type_complexity)]
+    fn shade(&self) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<Vec<[f64; 3]>>) {
+        let (w, h) = (self.scene.field.width(), self.scene.field.height());
+        let mut direct = Vec::with_capacity(w * h);
+        let mut glossy = Vec::with_capacity(w * h);
+        let mut incident = Vec::with_capacity(w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let (d, g, tr) = self.texel(x, y);
+                direct.push(d);
+                glossy.push(g);
+                incident.push(tr);
+            }
+        }
+        (direct, glossy, incident)
+    }
+
+    /// Texel `(x, y)`'s diffuse and glossy exit radiance and incident SH radiance.
+    fn texel(&self, x: usize, y: usize) -> ([f64; 3], [f64; 3], Vec<[f64; 3]>) {
+        let (scene, work) = (self.scene, self.work);
+        let (w, h) = (scene.field.width(), scene.field.height());
+        let (xw, yw) = (rescale(x as f64, w, work.0), rescale(y as f64, h, work.1));
+        let (tr, tr_env) = self.incident(x, y, xw, yw);
+        let (mut d, mut g) = self.lobes.shade(scene, x, y, self.normals[y * w + x], &tr);
+        if let Some(t3) = self.blockers.and_then(|b| b.transfer.as_ref()) {
+            self.log_diffuse(t3, (x, y), (xw, yw), &tr_env, &mut d);
+        }
+        if let (Some(tg), Some(ks)) = (self.blockers.and_then(|b| b.glossy.as_ref()), scene.material.specular) {
+            self.log_glossy((tg, ks), (x, y), (xw, yw), &tr_env, &mut g);
+        }
+        (d, g, tr)
+    }
+
+    /// Incident radiance T = Σ_sets L ⊛ V (§6) at texel `(x, y)` (receiver-grid position
+    /// `(xw, yw)`), V interpolated from the receiver grid, times the sphere blockers' V_s where
+    /// there are blockers; and the environment's part where its visibility is combined with the
+    /// blockers' (log mode).
+    fn incident(&self, x: usize, y: usize, xw: f64, yw: f64) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let (scene, work, t) = (self.scene, self.work, self.t);
+        let n = scene.gi.sh_order;
+        let mut tr = vec![[0.0f64; 3]; n * n];
+        let mut tr_env = vec![[0.0f64; 3]; n * n];
+        let mut tr_key = vec![[0.0f64; 3]; n * n];
+        for (si, (vis, light)) in self.visibility.iter().zip(self.lighting).enumerate() {
+            let combined = self.blockers.and_then(|b| b.environment.as_ref()).filter(|_| si == 0);
+            let v = interpolate(combined.unwrap_or(vis), work, xw, yw, scene.wrap);
+            // gi.blocker_key_lights = "overlap": a key light scaled by the fraction of its
+            // cap the spheres leave open, outside the product with V_s.
+            let open = match self.sets[si].0 {
+                SetKind::KeyLight(i) if self.blockers.is_some() && self.overlap => Some(key_open(scene, x, y, i)),
+                _ => None,
+            };
+            let into = if combined.is_some() {
+                &mut tr_env
+            } else if open.is_some() {
+                &mut tr_key
+            } else {
+                &mut tr
+            };
+            let scale = open.unwrap_or(1.0);
+            for ch in 0..3 {
+                let l: Vec<f64> = light.iter().map(|c| c[ch]).collect();
+                for (k, val) in triple::product(t, &l, &v).into_iter().enumerate() {
+                    into[k][ch] += scale * val;
+                }
+            }
+        }
+        if let Some(b) = self.blockers {
+            let vs = interpolate(&b.spheres, work, xw, yw, scene.wrap);
+            tr = super::blockers::times(t, &tr, &vs);
+            for (a, (e, k)) in tr.iter_mut().zip(tr_env.iter().zip(&tr_key)) {
+                *a = [a[0] + e[0] + k[0], a[1] + e[1] + k[1], a[2] + e[2] + k[2]];
+            }
+        }
+        (tr, tr_env)
+    }
+
+    /// log_brdf: the environment's diffuse term from its transfer `t3` (seed 001 §5), added to
+    /// `d`: ρ/π·(π⟨L_env, T_ρ⟩ − ⟨L_env ⊛ V', cc_N⟩).
+    fn log_diffuse(
+        &self,
+        t3: &[Vec<f64>],
+        (x, y): (usize, usize),
+        (xw, yw): (f64, f64),
+        tr_env: &[[f64; 3]],
+        d: &mut [f64; 3],
+    ) {
+        let scene = self.scene;
+        let (n, w) = (scene.gi.sh_order, scene.field.width());
+        let t3 = interpolate(t3, self.work, xw, yw, scene.wrap);
+        let cc = zh::rotate(n, &zh::clamped_cosine(n), self.normals[y * w + x]);
+        let rho = self.albedo.as_ref().map_or([0.0; 3], |a| a[y * w + x]);
+        for ch in 0..3 {
+            let e: f64 = (0..n * n).map(|k| PI * self.lighting[0][k][ch] * t3[k] - tr_env[k][ch] * cc[k]).sum();
+            d[ch] += rho[ch] / PI * e;
+        }
+    }
+
+    /// log_brdf: the environment's glossy term from its glossy transfer `tg` (eq. 27), added to
+    /// `g`: k_s·(⟨L_env, T_φ⟩ − ⟨L_env ⊛ V', phong_R⟩).
+    fn log_glossy(
+        &self,
+        (tg, ks): (&[Vec<f64>], [f32; 3]),
+        (x, y): (usize, usize),
+        (xw, yw): (f64, f64),
+        tr_env: &[[f64; 3]],
+        g: &mut [f64; 3],
+    ) {
+        let scene = self.scene;
+        let (n, w) = (scene.gi.sh_order, scene.field.width());
+        let tg = interpolate(tg, self.work, xw, yw, scene.wrap);
+        let gz = self.lobes.phong_at(scene, x, y, self.normals[y * w + x]);
+        for ch in 0..3 {
+            let e: f64 = (0..n * n).map(|k| self.lighting[0][k][ch] * tg[k] - tr_env[k][ch] * gz[k]).sum();
+            g[ch] += ks[ch] as f64 * e;
+        }
+    }
 }

@@ -289,51 +289,11 @@ impl Generator {
                 });
             }
             Generator::Terraces { seed, steps, amplitude } => {
-                let octs: Vec<Octave> = (0..4).map(|k| Octave::new(seed, k, 3.0)).collect();
-                let total: f64 = octs.iter().map(|o| o.weight).sum();
-                let scale = amplitude * w / total;
-                let step = 2.0 * amplitude.abs() * w / f64::from(steps);
-                fill(&mut data, width, height, |x, y| {
-                    let f: f64 = octs.iter().map(|o| o.weight * o.sample(x / w, y / w)).sum::<f64>() * scale;
-                    if step > 0.0 {
-                        (f / step + 0.5).floor() * step
-                    } else {
-                        f
-                    }
-                });
+                terraces(&mut data, (width, height), seed, steps, amplitude)
             }
-            Generator::Spikes { seed, count, height: tall } => {
-                let octs: Vec<Octave> = (0..3).map(|k| Octave::new(seed, k, 2.0)).collect();
-                let total: f64 = octs.iter().map(|o| o.weight).sum();
-                let scale = 0.05 * tall * w / total;
-                fill(&mut data, width, height, |x, y| {
-                    octs.iter().map(|o| o.weight * o.sample(x / w, y / w)).sum::<f64>() * scale
-                });
-                for (cx, cy, u) in feature_centres(seed, count, width, height) {
-                    let (i, j) = (cx.round() as usize, cy.round() as usize);
-                    // Spikes on the same texel do not stack: the tallest one stands.
-                    let v = &mut data[j * width + i];
-                    *v = v.max(((0.5 + 0.5 * u) * tall * w) as f32);
-                }
-            }
+            Generator::Spikes { seed, count, height: tall } => spikes(&mut data, (width, height), seed, count, tall),
             Generator::City { seed, blocks, street, height: tall, density } => {
-                let pitch = (w / f64::from(blocks)).max(2.0);
-                let s = hash(seed, 0, 0, SALT_CITY);
-                fill(&mut data, width, height, |x, y| {
-                    let (bx, u) = split(x / pitch);
-                    let (by, v) = split(y / pitch);
-                    let lot = 1.0 - street;
-                    if u >= lot || v >= lot {
-                        return 0.0; // street
-                    }
-                    let lx = 2 * bx + i64::from(u >= 0.5 * lot);
-                    let ly = 2 * by + i64::from(v >= 0.5 * lot);
-                    if unit(hash(s, lx, ly, 1)) < density {
-                        tall * w * (0.25 + 0.75 * unit(hash(s, lx, ly, 2)))
-                    } else {
-                        0.0
-                    }
-                });
+                city(&mut data, (width, height), seed, blocks, street, tall, density)
             }
         }
         HeightField::new(&source, width, height, data, DEFAULT_MAX_DIM)
@@ -489,6 +449,70 @@ fn check(generator: &str, key: &str, value: impl fmt::Display, ok: bool, expecte
 }
 
 /// Fills `data` row by row (row `j` = y) with `f(x, y)` at texel `(i, j)`, rounded to f32.
+/// The heights of [`Generator::Terraces`] into `data`: its fbm rounded to `steps` levels.
+fn terraces(data: &mut Vec<f32>, (width, height): (usize, usize), seed: u64, steps: u32, amplitude: f64) {
+    let w = width as f64;
+    let octs: Vec<Octave> = (0..4).map(|k| Octave::new(seed, k, 3.0)).collect();
+    let total: f64 = octs.iter().map(|o| o.weight).sum();
+    let scale = amplitude * w / total;
+    let step = 2.0 * amplitude.abs() * w / f64::from(steps);
+    fill(data, width, height, |x, y| {
+        let f: f64 = octs.iter().map(|o| o.weight * o.sample(x / w, y / w)).sum::<f64>() * scale;
+        if step > 0.0 {
+            (f / step + 0.5).floor() * step
+        } else {
+            f
+        }
+    });
+}
+
+/// The heights of [`Generator::Spikes`] (height `tall`) into `data`: fbm ground, then the
+/// spikes.
+fn spikes(data: &mut Vec<f32>, (width, height): (usize, usize), seed: u64, count: u32, tall: f64) {
+    let w = width as f64;
+    let octs: Vec<Octave> = (0..3).map(|k| Octave::new(seed, k, 2.0)).collect();
+    let total: f64 = octs.iter().map(|o| o.weight).sum();
+    let scale = 0.05 * tall * w / total;
+    fill(data, width, height, |x, y| octs.iter().map(|o| o.weight * o.sample(x / w, y / w)).sum::<f64>() * scale);
+    for (cx, cy, u) in feature_centres(seed, count, width, height) {
+        let (i, j) = (cx.round() as usize, cy.round() as usize);
+        // Spikes on the same texel do not stack: the tallest one stands.
+        let v = &mut data[j * width + i];
+        *v = v.max(((0.5 + 0.5 * u) * tall * w) as f32);
+    }
+}
+
+/// The heights of [`Generator::City`] (height `tall`) into `data`: streets at 0, buildings on
+/// the lots.
+fn city(
+    data: &mut Vec<f32>,
+    (width, height): (usize, usize),
+    seed: u64,
+    blocks: u32,
+    street: f64,
+    tall: f64,
+    density: f64,
+) {
+    let w = width as f64;
+    let pitch = (w / f64::from(blocks)).max(2.0);
+    let s = hash(seed, 0, 0, SALT_CITY);
+    fill(data, width, height, |x, y| {
+        let (bx, u) = split(x / pitch);
+        let (by, v) = split(y / pitch);
+        let lot = 1.0 - street;
+        if u >= lot || v >= lot {
+            return 0.0; // street
+        }
+        let lx = 2 * bx + i64::from(u >= 0.5 * lot);
+        let ly = 2 * by + i64::from(v >= 0.5 * lot);
+        if unit(hash(s, lx, ly, 1)) < density {
+            tall * w * (0.25 + 0.75 * unit(hash(s, lx, ly, 2)))
+        } else {
+            0.0
+        }
+    });
+}
+
 fn fill(data: &mut Vec<f32>, width: usize, height: usize, f: impl Fn(f64, f64) -> f64) {
     for j in 0..height {
         for i in 0..width {

@@ -1,6 +1,6 @@
 //! Device choice, ownership, validation messenger and a submit-and-wait helper.
 
-use std::ffi::{c_void, CStr, CString};
+use std::ffi::{c_char, c_void, CStr, CString};
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex};
 
@@ -186,6 +186,120 @@ fn rank(kind: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
+/// The instance layers (validation, where `validation` asks for it and it is installed) and
+/// extensions (`VK_EXT_debug_utils` where available) [`Context::headless_with`] enables, and
+/// whether `VK_EXT_debug_utils` is available.
+fn instance_layers(entry: &ash::Entry, validation: bool) -> Result<(Vec<*const c_char>, Vec<*const c_char>, bool)> {
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+    let exts =
+        unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
+    let has_debug_utils =
+        exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
+    let mut layer_ptrs = Vec::new();
+    if validation {
+        if !layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER)) {
+            return Err(Error::Unsupported(
+                "validation requested (HFGI_VALIDATION=1) but VK_LAYER_KHRONOS_validation is not installed \
+                 (Debian: apt-get install vulkan-validationlayers)"
+                    .into(),
+            ));
+        }
+        if !has_debug_utils {
+            return Err(Error::Unsupported("validation requested but VK_EXT_debug_utils is unavailable".into()));
+        }
+        layer_ptrs.push(VALIDATION_LAYER.as_ptr());
+    }
+    let mut ext_ptrs = Vec::new();
+    if has_debug_utils {
+        ext_ptrs.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    Ok((layer_ptrs, ext_ptrs, has_debug_utils))
+}
+
+/// The instance with layers `layer_ptrs` and extensions `ext_ptrs`, and with `validation` the
+/// messenger that collects its warnings and errors into `messages` (with `sync`,
+/// synchronization validation too).
+fn create_instance(
+    entry: &ash::Entry,
+    (layer_ptrs, ext_ptrs): (&[*const c_char], &[*const c_char]),
+    validation: bool,
+    sync: bool,
+    messages: &Arc<Mutex<Vec<String>>>,
+) -> Result<(ash::Instance, Option<Messenger>)> {
+    let mut dbg_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
+                | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+        )
+        .pfn_user_callback(Some(on_message))
+        .user_data(Arc::as_ptr(messages) as *mut c_void);
+
+    let app =
+        vk::ApplicationInfo::default().application_name(c"hfgi").engine_name(c"hfgi").api_version(vk::API_VERSION_1_3);
+    let mut ici = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(layer_ptrs)
+        .enabled_extension_names(ext_ptrs);
+    let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+    if validation {
+        // Chained so that instance creation/destruction messages are caught too.
+        ici = ici.push_next(&mut dbg_info);
+        if sync {
+            ici = ici.push_next(&mut features);
+        }
+    }
+    let instance = unsafe { entry.create_instance(&ici, None) }
+        .map_err(|result| Error::NoDevice(format!("vkCreateInstance failed with {result:?}; {}", driver_hint())))?;
+    let messenger = if validation {
+        let loader = ash::ext::debug_utils::Instance::new(entry, &instance);
+        match unsafe { loader.create_debug_utils_messenger(&dbg_info, None) } {
+            Ok(raw) => Some(Messenger { loader, raw }),
+            Err(e) => {
+                unsafe { instance.destroy_instance(None) };
+                return Err(Error::Vulkan { call: "vkCreateDebugUtilsMessengerEXT", result: e });
+            }
+        }
+    } else {
+        None
+    };
+    Ok((instance, messenger))
+}
+
+/// The device (one queue of `family`, `synchronization2` and `dynamicRendering` enabled), its
+/// queue and an allocator on it; on failure nothing of it is left (the instance is the
+/// caller's to clean up).
+fn create_device(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    family: u32,
+) -> Result<(ash::Device, vk::Queue, Allocator)> {
+    let priorities = [1.0f32];
+    let qci = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
+    let dci = vk::DeviceCreateInfo::default().queue_create_infos(&qci).push_next(&mut f13);
+    let device = unsafe { instance.create_device(physical, &dci, None) }
+        .map_err(|e| Error::Vulkan { call: "vkCreateDevice", result: e })?;
+    let queue = unsafe { device.get_device_queue(family, 0) };
+    let allocator = match Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device: physical,
+        debug_settings: Default::default(),
+        buffer_device_address: false,
+        allocation_sizes: Default::default(),
+    }) {
+        Ok(a) => a,
+        Err(e) => {
+            unsafe { device.destroy_device(None) };
+            return Err(Error::Allocation { name: "allocator".into(), size: 0, reason: e.to_string() });
+        }
+    };
+    Ok((device, queue, allocator))
+}
+
 impl Context {
     /// Creates an instance and device of its own; see [`ContextOptions`] for the environment
     /// variables it reads. Works on lavapipe.
@@ -200,76 +314,10 @@ impl Context {
         let filter = opts.device_filter.clone().or_else(|| std::env::var("HFGI_DEVICE").ok()).filter(|s| !s.is_empty());
         // SAFETY: loading the system Vulkan loader.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::Loader(e.to_string()))?;
-
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
-        let exts = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .vk("vkEnumerateInstanceExtensionProperties")?;
-        let has_debug_utils =
-            exts.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ash::ext::debug_utils::NAME));
-        let mut layer_ptrs = Vec::new();
-        if validation {
-            if !layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == VALIDATION_LAYER)) {
-                return Err(Error::Unsupported(
-                    "validation requested (HFGI_VALIDATION=1) but VK_LAYER_KHRONOS_validation is not installed \
-                     (Debian: apt-get install vulkan-validationlayers)"
-                        .into(),
-                ));
-            }
-            if !has_debug_utils {
-                return Err(Error::Unsupported("validation requested but VK_EXT_debug_utils is unavailable".into()));
-            }
-            layer_ptrs.push(VALIDATION_LAYER.as_ptr());
-        }
-        let mut ext_ptrs = Vec::new();
-        if has_debug_utils {
-            ext_ptrs.push(ash::ext::debug_utils::NAME.as_ptr());
-        }
-
+        let (layer_ptrs, ext_ptrs, has_debug_utils) = instance_layers(&entry, validation)?;
         let messages: Arc<Mutex<Vec<String>>> = Arc::new(Mutex::new(Vec::new()));
-        let mut dbg_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-            )
-            .message_type(
-                vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE
-                    | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
-            )
-            .pfn_user_callback(Some(on_message))
-            .user_data(Arc::as_ptr(&messages) as *mut c_void);
-
-        let app = vk::ApplicationInfo::default()
-            .application_name(c"hfgi")
-            .engine_name(c"hfgi")
-            .api_version(vk::API_VERSION_1_3);
-        let mut ici = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layer_ptrs)
-            .enabled_extension_names(&ext_ptrs);
         let sync = opts.sync_validation.unwrap_or_else(|| env_flag("HFGI_SYNC_VALIDATION"));
-        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
-        if validation {
-            // Chained so that instance creation/destruction messages are caught too.
-            ici = ici.push_next(&mut dbg_info);
-            if sync {
-                ici = ici.push_next(&mut features);
-            }
-        }
-        let instance = unsafe { entry.create_instance(&ici, None) }
-            .map_err(|result| Error::NoDevice(format!("vkCreateInstance failed with {result:?}; {}", driver_hint())))?;
-        let messenger = if validation {
-            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            match unsafe { loader.create_debug_utils_messenger(&dbg_info, None) } {
-                Ok(raw) => Some(Messenger { loader, raw }),
-                Err(e) => {
-                    unsafe { instance.destroy_instance(None) };
-                    return Err(Error::Vulkan { call: "vkCreateDebugUtilsMessengerEXT", result: e });
-                }
-            }
-        } else {
-            None
-        };
+        let (instance, messenger) = create_instance(&entry, (&layer_ptrs, &ext_ptrs), validation, sync, &messages)?;
 
         // From here on, failures must clean up the instance.
         let cleanup = |instance: &ash::Instance, messenger: &Option<Messenger>| unsafe {
@@ -286,31 +334,11 @@ impl Context {
             }
         };
         let (physical, family) = picked;
-        let priorities = [1.0f32];
-        let qci = [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
-        let dci = vk::DeviceCreateInfo::default().queue_create_infos(&qci).push_next(&mut f13);
-        let device = match unsafe { instance.create_device(physical, &dci, None) } {
+        let (device, queue, allocator) = match create_device(&instance, physical, family) {
             Ok(d) => d,
             Err(e) => {
                 cleanup(&instance, &messenger);
-                return Err(Error::Vulkan { call: "vkCreateDevice", result: e });
-            }
-        };
-        let queue = unsafe { device.get_device_queue(family, 0) };
-        let allocator = match Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device: physical,
-            debug_settings: Default::default(),
-            buffer_device_address: false,
-            allocation_sizes: Default::default(),
-        }) {
-            Ok(a) => a,
-            Err(e) => {
-                unsafe { device.destroy_device(None) };
-                cleanup(&instance, &messenger);
-                return Err(Error::Allocation { name: "allocator".into(), size: 0, reason: e.to_string() });
+                return Err(e);
             }
         };
         let debug_device = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
