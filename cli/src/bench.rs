@@ -544,35 +544,9 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     );
     let mut rows: Vec<Row> = Vec::new();
     let mut references: Vec<(String, Option<f64>, Option<f64>)> = Vec::new();
-    let size = a.field_size();
     for path in &a.scenes {
-        let mut overrides = vec![format!("gi.bounces={}", a.bounces)];
-        if size > 0 {
-            overrides.push(format!("heightfield.size={size}"));
-        }
-        overrides.extend(a.overrides.iter().cloned());
-        let mut scene = load_scene_or_default(Some(path), &overrides)?;
-        // The ground truth treats surfaces as diffuse: benchmark diffuse materials.
-        scene.material.specular = None;
-        if a.no_key_lights {
-            scene.key_lights.clear();
-        }
-        let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-        let cfgs = match a.sweep {
-            Sweep::Knobs => {
-                let content =
-                    Content { local_lights: !scene.local_lights.is_empty(), spheres: !scene.spheres.is_empty() };
-                configs(&scene.gi, a.quick, scene.wrap, content)
-            }
-            Sweep::Ablation => ablation(&scene.gi, false),
-            Sweep::Presets => ablation(&scene.gi, true),
-        };
-        let cfgs: Vec<(String, GiSettings)> = cfgs
-            .into_iter()
-            .enumerate()
-            .filter(|(i, (knob, _))| *i == 0 || a.only.is_empty() || a.only.iter().any(|o| o == knob))
-            .map(|(_, c)| c)
-            .collect();
+        let (name, scene) = bench_scene(&a, path)?;
+        let cfgs = scene_configs(&a, &scene);
         let max_b = cfgs.iter().map(|(_, g)| g.bounces).max().unwrap_or(0);
         let mut orders: Vec<usize> = cfgs.iter().map(|(_, g)| g.sh_order).collect();
         orders.sort();
@@ -585,17 +559,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         let truths = truths(&ctx, &a, &scene, &name, &orders, max_b, &bar, &mut references)?;
         for (knob, gi) in cfgs {
             bar.set_message(format!("{name}: {knob}"));
-            let mut s = scene.clone();
-            s.gi = gi.clone();
-            s.gi.amortize = false;
-            let (stages, memory, layers) = measure(&ctx, &s, a.frames).with_context(|| format!("{name}: {knob}"))?;
-            let (_, exact, _, shvis) = truths.iter().find(|(n, _, _, _)| *n == gi.sh_order).expect("reference");
-            let got = [&layers.direct, &layers.indirect, &layers.total];
-            let err = |r: &[Vec<[f64; 3]>; 3]| [0, 1, 2].map(|i| rel_l2(got[i], &r[i]));
-            let e = truth_layers(exact, gi.bounces);
-            let v = shvis.as_ref().map_or([f64::NAN; 3], |t| err(&truth_layers(t, gi.bounces)));
-            let total_ms = stages.iter().map(|(_, ms)| ms).sum();
-            rows.push(Row { scene: name.clone(), knob, gi, stages, total_ms, memory, exact: err(&e), shvis: v });
+            rows.push(measure_row(&ctx, &scene, &name, knob, gi, a.frames, &truths)?);
             bar.inc(1);
         }
         bar.finish_and_clear();
@@ -604,6 +568,67 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         write_outputs(&a, &rows, &references, &info, clock)?;
     }
     Ok(())
+}
+
+/// The scene at `path` as benched, with its name (the file stem): at the bench's field size
+/// and bounces with the `--set` overrides, diffuse, without key lights with `--no-key-lights`.
+fn bench_scene(a: &BenchArgs, path: &std::path::Path) -> Result<(String, Scene)> {
+    let size = a.field_size();
+    let mut overrides = vec![format!("gi.bounces={}", a.bounces)];
+    if size > 0 {
+        overrides.push(format!("heightfield.size={size}"));
+    }
+    overrides.extend(a.overrides.iter().cloned());
+    let mut scene = load_scene_or_default(Some(path), &overrides)?;
+    // The ground truth treats surfaces as diffuse: benchmark diffuse materials.
+    scene.material.specular = None;
+    if a.no_key_lights {
+        scene.key_lights.clear();
+    }
+    let name = path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    Ok((name, scene))
+}
+
+/// The configurations `(knob, settings)` of `--sweep` for `scene`, kept to the baseline and
+/// the `--only` knobs when given.
+fn scene_configs(a: &BenchArgs, scene: &Scene) -> Vec<(String, GiSettings)> {
+    let cfgs = match a.sweep {
+        Sweep::Knobs => {
+            let content = Content { local_lights: !scene.local_lights.is_empty(), spheres: !scene.spheres.is_empty() };
+            configs(&scene.gi, a.quick, scene.wrap, content)
+        }
+        Sweep::Ablation => ablation(&scene.gi, false),
+        Sweep::Presets => ablation(&scene.gi, true),
+    };
+    cfgs.into_iter()
+        .enumerate()
+        .filter(|(i, (knob, _))| *i == 0 || a.only.is_empty() || a.only.iter().any(|o| o == knob))
+        .map(|(_, c)| c)
+        .collect()
+}
+
+/// The row of configuration `gi` (`knob`) of `scene` (`name`): its stage times over `frames`
+/// timed frames, its memory and its errors against the `truths` at its order.
+fn measure_row(
+    ctx: &Context,
+    scene: &Scene,
+    name: &str,
+    knob: String,
+    gi: GiSettings,
+    frames: u32,
+    truths: &[Truths],
+) -> Result<Row> {
+    let mut s = scene.clone();
+    s.gi = gi.clone();
+    s.gi.amortize = false;
+    let (stages, memory, layers) = measure(ctx, &s, frames).with_context(|| format!("{name}: {knob}"))?;
+    let (_, exact, _, shvis) = truths.iter().find(|(n, _, _, _)| *n == gi.sh_order).expect("reference");
+    let got = [&layers.direct, &layers.indirect, &layers.total];
+    let err = |r: &[Vec<[f64; 3]>; 3]| [0, 1, 2].map(|i| rel_l2(got[i], &r[i]));
+    let e = truth_layers(exact, gi.bounces);
+    let v = shvis.as_ref().map_or([f64::NAN; 3], |t| err(&truth_layers(t, gi.bounces)));
+    let total_ms = stages.iter().map(|(_, ms)| ms).sum();
+    Ok(Row { scene: name.to_string(), knob, gi, stages, total_ms, memory, exact: err(&e), shvis: v })
 }
 
 fn write_outputs(

@@ -296,10 +296,6 @@ impl IndirectPass {
         let data = ScanData::new(scene, pyramid.layout().count());
         let levels = data.radiance_levels(scene)?;
         let ScanData { samples, fold, ladder, sets } = data;
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
         let mut bufs: Vec<Buffer> = Vec::new();
         let mut pipes: Vec<ComputePipeline> = Vec::new();
         let mut radiance = None;
@@ -309,30 +305,15 @@ impl IndirectPass {
         let kinds = scan_kinds(scene, replay);
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
             let sizes = buffer_sizes(scene, (ww, wh), samples.len(), fold.len(), ladder.len());
-            for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
-                bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
-            }
+            Self::create_buffers(ctx, &mut bufs, sizes)?;
             let rad = radiance.insert(radiance_pyramid(ctx, scene, pyramid, &levels, shade)?);
-            // Radiance level 0 read as the bilinear image through the stack too (with f16 storage
-            // rounded to halves like every other plane of the stack; docs/performance.md §17).
-            let raw0 = gi.level0 == crate::scene::model::Level0::Bilinear;
-            let rplane = rad.pyramid.set_raw_plane0(raw0);
-            let raw_planes = super::shared::raw_plane_flags(pyramid.raw_plane0(), rplane);
-            let push = scan_push(scene, (ww, wh), sets[0].1, rad, raw_planes);
-            let layout = pyramid.layout();
+            let push = Self::first_push(scene, pyramid, rad, sets[0].1);
             if has_max {
                 max = Some(MaxPyramid::new(ctx, pyramid)?);
             }
-            memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(&samples))?;
-            memory::upload_f32(ctx, &bufs[1], 0, &fold)?;
-            memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(&levels))?;
-            // Defined sets before the first bounce records any (a later bounce recorded alone
-            // casts no member rather than reading garbage); without the replay nothing reads them.
-            if replay {
-                memory::zero(ctx, &bufs[MEMBERS])?;
-            }
+            Self::upload(ctx, &bufs, (&samples, &fold, &levels), replay)?;
             let binds = scan_binds(pyramid, rad, &bufs, shade.bindings()[3], max.as_ref());
-            let scan_sets = scan_pipelines(ctx, scene, layout.count(), &push, &kinds, &binds, &mut pipes)?;
+            let scan_sets = scan_pipelines(ctx, scene, pyramid.layout().count(), &push, &kinds, &binds, &mut pipes)?;
             let shade_set = shade_set(ctx, scene, pyramid, shade, &bufs[U], rad, blockers, &mut pipes)?;
             Ok((scan_sets, shade_set, push))
         })();
@@ -366,6 +347,54 @@ impl IndirectPass {
         };
         pass.set_pre_exposure(super::storage::pre_exposure(scene));
         Ok(pass)
+    }
+
+    /// Creates the scan's own buffers of `sizes` ([`buffer_sizes`]' order) with their texel
+    /// views ([`BUFFER_VIEWS`]) into `bufs`, which the caller destroys on an error.
+    fn create_buffers(ctx: &Context, bufs: &mut Vec<Buffer>, sizes: [(&'static str, u64); 5]) -> Result<()> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
+            bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
+        }
+        Ok(())
+    }
+
+    /// The scan's push constants for the first bounce's `sample_count` samples, with the raw
+    /// level-0 planes of the height stack and of `rad`'s stack (which this sets).
+    fn first_push(
+        scene: &Scene,
+        pyramid: &HeightPyramid,
+        rad: &mut RadiancePyramid,
+        sample_count: u32,
+    ) -> IndirectPush {
+        // Radiance level 0 read as the bilinear image through the stack too (with f16 storage
+        // rounded to halves like every other plane of the stack; docs/performance.md §17).
+        let raw0 = scene.gi.level0 == crate::scene::model::Level0::Bilinear;
+        let rplane = rad.pyramid.set_raw_plane0(raw0);
+        let raw_planes = super::shared::raw_plane_flags(pyramid.raw_plane0(), rplane);
+        scan_push(scene, pyramid.work(), sample_count, rad, raw_planes)
+    }
+
+    /// Uploads the samples, the fold and the radiance levels' table into `bufs` 0–2 and, with
+    /// the `replay`, clears the recorded casting sets.
+    fn upload(
+        ctx: &Context,
+        bufs: &[Buffer],
+        (samples, fold, levels): (&[[f32; 4]], &[f32], &[u32]),
+        replay: bool,
+    ) -> Result<()> {
+        memory::upload(ctx, &bufs[0], 0, bytemuck::cast_slice(samples))?;
+        memory::upload_f32(ctx, &bufs[1], 0, fold)?;
+        memory::upload(ctx, &bufs[2], 0, bytemuck::cast_slice(levels))?;
+        // Defined sets before the first bounce records any (a later bounce recorded alone
+        // casts no member rather than reading garbage); without the replay nothing reads them.
+        if replay {
+            memory::zero(ctx, &bufs[MEMBERS])?;
+        }
+        Ok(())
     }
 
     /// Sets the pre-exposure of f16 storage ([`super::storage::pre_exposure`] of the live

@@ -295,36 +295,11 @@ impl ShadePass {
         blockers: Option<&super::blockers::BlockerPass>,
         scene: &Scene,
     ) -> Result<Self> {
-        let (w, h) = (scene.field.width(), scene.field.height());
         let data = ShadeData::new(scene);
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
         let mut bufs: Vec<Buffer> = Vec::new();
         let mut pipeline = None;
-        // Texel views of the light (vec4s) and the triple table (uvec2s), docs/performance.md §17.
-        let views = [Some(vk::Format::R32G32B32A32_UINT), Some(vk::Format::R32G32_UINT), None, None];
         let made = (|| -> Result<vk::DescriptorSet> {
-            for (((name, size), bytes), view) in upload_sizes(scene).into_iter().zip(data.uploads()).zip(views) {
-                debug_assert_eq!(size, upload_bytes(bytes.len()), "{name}");
-                let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
-                let b = match view {
-                    Some(format) => b.with_texel_view(ctx, format)?,
-                    None => b,
-                };
-                if !bytes.is_empty() {
-                    memory::upload(ctx, &b, 0, bytes)?;
-                }
-                bufs.push(b);
-            }
-            let out = Buffer::new(ctx, OUTPUT_BUFFER, output_bytes(scene), usage, MemoryLocation::GpuOnly)?;
-            // Planes not written by a frame (indirect with bounces = 0) must read as zero.
-            let cleared = memory::zero(ctx, &out);
-            bufs.push(out);
-            cleared?;
-            let inc_bytes = incident_bytes(scene);
-            bufs.push(Buffer::new(ctx, INCIDENT_BUFFER, inc_bytes, usage, MemoryLocation::GpuOnly)?);
+            Self::create_buffers(ctx, &mut bufs, scene, &data)?;
             let p = pipeline.insert(ComputePipeline::new(
                 ctx,
                 &shaders::SHADE_DIRECT_COMP,
@@ -362,13 +337,52 @@ impl ShadePass {
         };
         let incident = bufs.pop().expect("incident");
         let output = bufs.pop().expect("output");
-        let (ww, wh) = pyramid.work();
+        let push = Self::push_constants(scene, pyramid.work(), vis.set_count());
+        let planes = planes(scene);
+        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push, planes })
+    }
+
+    /// Creates into `bufs` (which the caller destroys on an error) the uploaded buffers of
+    /// `data` ([`upload_sizes`] order), then the output buffer (cleared) and the incident buffer.
+    fn create_buffers(ctx: &Context, bufs: &mut Vec<Buffer>, scene: &Scene, data: &ShadeData) -> Result<()> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        // Texel views of the light (vec4s) and the triple table (uvec2s), docs/performance.md §17.
+        let views = [Some(vk::Format::R32G32B32A32_UINT), Some(vk::Format::R32G32_UINT), None, None];
+        for (((name, size), bytes), view) in upload_sizes(scene).into_iter().zip(data.uploads()).zip(views) {
+            debug_assert_eq!(size, upload_bytes(bytes.len()), "{name}");
+            let b = Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
+            let b = match view {
+                Some(format) => b.with_texel_view(ctx, format)?,
+                None => b,
+            };
+            if !bytes.is_empty() {
+                memory::upload(ctx, &b, 0, bytes)?;
+            }
+            bufs.push(b);
+        }
+        let out = Buffer::new(ctx, OUTPUT_BUFFER, output_bytes(scene), usage, MemoryLocation::GpuOnly)?;
+        // Planes not written by a frame (indirect with bounces = 0) must read as zero.
+        let cleared = memory::zero(ctx, &out);
+        bufs.push(out);
+        cleared?;
+        let inc_bytes = incident_bytes(scene);
+        bufs.push(Buffer::new(ctx, INCIDENT_BUFFER, inc_bytes, usage, MemoryLocation::GpuOnly)?);
+        Ok(())
+    }
+
+    /// The push constants on the working grid `(ww, wh)` with `set_count` light sets, the
+    /// scene's camera and material set.
+    fn push_constants(scene: &Scene, (ww, wh): (u32, u32), set_count: usize) -> ShadePush {
+        let (w, h) = (scene.field.width(), scene.field.height());
         let mut push = ShadePush {
             width: w as u32,
             height: h as u32,
             work_width: ww,
             work_height: wh,
-            set_count: vis.set_count() as u32,
+            set_count: set_count as u32,
             wrap: scene.wrap as u32,
             texel_size: scene.texel_size as f32,
             sphere_count: scene.spheres.len() as u32,
@@ -378,8 +392,7 @@ impl ShadePass {
         };
         push.set_camera(scene.camera.position);
         push.set_material(&scene.material);
-        let planes = planes(scene);
-        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push, planes })
+        push
     }
 
     pub fn record(&self, rec: &mut Recorder) {

@@ -158,6 +158,15 @@ pub(crate) fn index_bytes(width: usize) -> u64 {
     6 * (width as u64 - 1) * 4
 }
 
+/// The contents of [`INDEX_BUFFER`]: one row of quads between vertex rows 0 and 1
+/// (v = row·W + i); instance j adds j·W in the shader. Diagonal (i, j)–(i+1, j+1).
+fn row_indices(width: usize) -> Vec<u32> {
+    let w = width as u32;
+    let indices: Vec<u32> = (0..w - 1).flat_map(|i| [i, i + 1, w + i + 1, i, w + i + 1, w + i]).collect();
+    debug_assert_eq!((indices.len() * 4) as u64, index_bytes(width));
+    indices
+}
+
 /// The inputs [`ViewPass`] binds and the image size it renders: a field of at least 2×2, buffers
 /// large enough for it, and a camera image within the device's largest 2D image.
 fn check_inputs(ctx: &Context, width: usize, height: usize, camera: &Camera, inputs: &ViewInputs) -> Result<()> {
@@ -249,64 +258,14 @@ impl ViewPass {
         let model = CameraModel::new(camera, width, height, texel_size, f64::from(lo), f64::from(hi))?;
         let choice = graphics::choose_targets(ctx, &COLOR_FORMATS, MAX_SAMPLES, opts.samples)?;
         let extent = vk::Extent2D { width: camera.width, height: camera.height };
-        let samples = vk::SampleCountFlags::from_raw(choice.samples);
-
-        let mut images: Vec<Image> = Vec::new();
-        let mut index = None;
-        let mut pipeline = None;
-        let made = (|| -> Result<vk::DescriptorSet> {
-            for a in attachments(choice.color_format, choice.depth_format, choice.samples) {
-                let count = vk::SampleCountFlags::from_raw(a.samples);
-                images.push(Image::new(ctx, a.name, extent, a.format, a.usage, count)?);
-            }
-            // One row of quads between vertex rows 0 and 1 (v = row·W + i); instance j adds j·W
-            // in the shader. Diagonal (i, j)–(i+1, j+1).
-            let w = width as u32;
-            let indices: Vec<u32> = (0..w - 1).flat_map(|i| [i, i + 1, w + i + 1, i, w + i + 1, w + i]).collect();
-            debug_assert_eq!((indices.len() * 4) as u64, index_bytes(width));
-            let ib = index.insert(Buffer::new(
-                ctx,
-                INDEX_BUFFER,
-                index_bytes(width),
-                vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuOnly,
-            )?);
-            memory::upload(ctx, ib, 0, bytemuck::cast_slice(&indices))?;
-            let p = pipeline.insert(GraphicsPipeline::new(
-                ctx,
-                &GraphicsDesc {
-                    name: "view/raster",
-                    vertex: &shaders::VIEW_RASTER_VERT,
-                    fragment: &shaders::VIEW_RASTER_FRAG,
-                    kinds: &[DescriptorKind::StorageBuffer; 2],
-                    push_size: std::mem::size_of::<ViewPush>() as u32,
-                    color_format: choice.color_format,
-                    depth_format: Some(choice.depth_format),
-                    depth_compare: vk::CompareOp::GREATER,
-                    samples,
-                    topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                    extent,
-                    max_sets: 1,
-                },
-            )?);
-            p.allocate_set(ctx, &[Bind::Buffer(inputs.heights), Bind::Buffer(inputs.shading)])
-        })();
-        let set = match made {
-            Ok(s) => s,
-            Err(e) => {
-                images.into_iter().for_each(|i| i.destroy(ctx));
-                index.into_iter().for_each(|b| b.destroy(ctx));
-                pipeline.into_iter().for_each(|mut p| p.destroy(ctx));
-                return Err(e);
-            }
-        };
+        let (mut images, index, pipeline, set) = Self::create_objects(ctx, width, &choice, extent, inputs)?;
         let msaa = if choice.samples > 1 { images.pop() } else { None };
         let depth = images.pop().expect("depth image");
         let output = images.pop().expect("output image");
         let mut me = Self {
-            pipeline: pipeline.expect("pipeline"),
+            pipeline,
             set,
-            index: index.expect("index buffer"),
+            index,
             index_count: 6 * (width as u32 - 1),
             instances: height as u32 - 1,
             msaa,
@@ -328,6 +287,68 @@ impl ViewPass {
         };
         me.update_push();
         Ok(me)
+    }
+
+    /// Creates the attachments ([`attachments`] order), the index buffer (uploaded now) and the
+    /// raster pipeline with its descriptor set, in that order. On an error destroys what was
+    /// made: the images, then the index buffer, then the pipeline.
+    fn create_objects(
+        ctx: &Context,
+        width: usize,
+        choice: &TargetChoice,
+        extent: vk::Extent2D,
+        inputs: &ViewInputs,
+    ) -> Result<(Vec<Image>, Buffer, GraphicsPipeline, vk::DescriptorSet)> {
+        let mut images: Vec<Image> = Vec::new();
+        let mut index = None;
+        let mut pipeline = None;
+        let made = (|| -> Result<vk::DescriptorSet> {
+            for a in attachments(choice.color_format, choice.depth_format, choice.samples) {
+                let count = vk::SampleCountFlags::from_raw(a.samples);
+                images.push(Image::new(ctx, a.name, extent, a.format, a.usage, count)?);
+            }
+            let indices = row_indices(width);
+            let ib = index.insert(Buffer::new(
+                ctx,
+                INDEX_BUFFER,
+                index_bytes(width),
+                vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?);
+            memory::upload(ctx, ib, 0, bytemuck::cast_slice(&indices))?;
+            let p = pipeline.insert(Self::create_pipeline(ctx, choice, extent)?);
+            p.allocate_set(ctx, &[Bind::Buffer(inputs.heights), Bind::Buffer(inputs.shading)])
+        })();
+        match made {
+            Ok(set) => Ok((images, index.expect("index buffer"), pipeline.expect("pipeline"), set)),
+            Err(e) => {
+                images.into_iter().for_each(|i| i.destroy(ctx));
+                index.into_iter().for_each(|b| b.destroy(ctx));
+                pipeline.into_iter().for_each(|mut p| p.destroy(ctx));
+                Err(e)
+            }
+        }
+    }
+
+    /// The raster pipeline for the chosen targets and the image size `extent`.
+    fn create_pipeline(ctx: &Context, choice: &TargetChoice, extent: vk::Extent2D) -> Result<GraphicsPipeline> {
+        GraphicsPipeline::new(
+            ctx,
+            &GraphicsDesc {
+                name: "view/raster",
+                vertex: &shaders::VIEW_RASTER_VERT,
+                fragment: &shaders::VIEW_RASTER_FRAG,
+                kinds: &[DescriptorKind::StorageBuffer; 2],
+                push_size: std::mem::size_of::<ViewPush>() as u32,
+                color_format: choice.color_format,
+                depth_format: Some(choice.depth_format),
+                depth_compare: vk::CompareOp::GREATER,
+                samples: vk::SampleCountFlags::from_raw(choice.samples),
+                topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+                extent,
+                max_sets: 1,
+            },
+        )
     }
 
     /// [`ViewPass::new`] for a renderer's scene: its field size, texel size, camera and height
@@ -575,42 +596,7 @@ impl ViewPass {
     pub fn record(&self, rec: &mut Recorder) {
         rec.scope(STAGE_RASTER, |ctx, cmd| {
             barrier::compute_to_graphics(ctx, cmd);
-            let attach = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
-            let attach_rw = (
-                vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-                vk::AccessFlags2::COLOR_ATTACHMENT_READ | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-            );
-            let tests = vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS;
-            let mut list = vec![
-                Transition {
-                    image: &self.output,
-                    old: vk::ImageLayout::UNDEFINED,
-                    new: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    src: (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::NONE),
-                    dst: attach_rw,
-                },
-                Transition {
-                    image: &self.depth,
-                    old: vk::ImageLayout::UNDEFINED,
-                    new: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
-                    src: (tests, vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE),
-                    dst: (
-                        tests,
-                        vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
-                            | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
-                    ),
-                },
-            ];
-            if let Some(m) = &self.msaa {
-                list.push(Transition {
-                    image: m,
-                    old: vk::ImageLayout::UNDEFINED,
-                    new: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    src: attach,
-                    dst: attach_rw,
-                });
-            }
-            barrier::image_transitions(ctx, cmd, &list);
+            barrier::image_transitions(ctx, cmd, &self.attachment_transitions());
             let targets = RenderTargets {
                 color: self.msaa.as_ref().unwrap_or(&self.output),
                 resolve: self.msaa.as_ref().map(|_| &self.output),
@@ -628,22 +614,7 @@ impl ViewPass {
                 self.index_count,
                 self.instances,
             );
-            if let Some(d) = self.spheres.as_ref().filter(|d| d.count > 0) {
-                let dev = ctx.device();
-                unsafe {
-                    dev.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, d.pipeline.pipeline);
-                    dev.cmd_bind_descriptor_sets(
-                        cmd,
-                        vk::PipelineBindPoint::GRAPHICS,
-                        d.pipeline.layout,
-                        0,
-                        &[d.set],
-                        &[],
-                    );
-                    dev.cmd_push_constants(cmd, d.pipeline.layout, GRAPHICS_STAGES, 0, bytemuck::bytes_of(&self.push));
-                    dev.cmd_draw(cmd, SPHERE_VERTICES, d.count, 0, 0);
-                }
-            }
+            self.draw_spheres(ctx, cmd);
             graphics::end_rendering(ctx, cmd);
             barrier::image_transitions(
                 ctx,
@@ -652,12 +623,65 @@ impl ViewPass {
                     image: &self.output,
                     old: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                     new: vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    src: attach,
+                    src: (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE),
                     dst: (vk::PipelineStageFlags2::COPY, vk::AccessFlags2::TRANSFER_READ),
                 }],
             );
         });
         self.recorded.set(true);
+    }
+
+    /// The transitions before rendering (module docs, step 2): the output image, the depth
+    /// image and, with MSAA, the MSAA colour image, each from UNDEFINED to its attachment layout.
+    fn attachment_transitions(&self) -> Vec<Transition<'_>> {
+        let attach = (vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+        let attach_rw = (
+            vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            vk::AccessFlags2::COLOR_ATTACHMENT_READ | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+        );
+        let tests = vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS;
+        let mut list = vec![
+            Transition {
+                image: &self.output,
+                old: vk::ImageLayout::UNDEFINED,
+                new: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                src: (vk::PipelineStageFlags2::ALL_COMMANDS, vk::AccessFlags2::NONE),
+                dst: attach_rw,
+            },
+            Transition {
+                image: &self.depth,
+                old: vk::ImageLayout::UNDEFINED,
+                new: vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL,
+                src: (tests, vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE),
+                dst: (
+                    tests,
+                    vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
+                ),
+            },
+        ];
+        if let Some(m) = &self.msaa {
+            list.push(Transition {
+                image: m,
+                old: vk::ImageLayout::UNDEFINED,
+                new: vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                src: attach,
+                dst: attach_rw,
+            });
+        }
+        list
+    }
+
+    /// The live spheres' instanced draw (inside the rendering; nothing without spheres).
+    fn draw_spheres(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        if let Some(d) = self.spheres.as_ref().filter(|d| d.count > 0) {
+            let dev = ctx.device();
+            unsafe {
+                dev.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, d.pipeline.pipeline);
+                dev.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, d.pipeline.layout, 0, &[d.set], &[]);
+                dev.cmd_push_constants(cmd, d.pipeline.layout, GRAPHICS_STAGES, 0, bytemuck::bytes_of(&self.push));
+                dev.cmd_draw(cmd, SPHERE_VERTICES, d.count, 0, 0);
+            }
+        }
     }
 
     /// Reads the view image back (waits) as RGBA, row 0 = top of the image; alpha is the

@@ -161,10 +161,6 @@ impl VisibilityPass {
         let VisibilityData { samples, fold, sets } = VisibilityData::new(scene);
         let env = sets.iter().filter(|s| s.kind == SetKind::Environment).map(|s| s.count as u64).sum::<u64>();
         let key_offsets = (env, env * (fold.len() as u64) / (samples.len().max(1) as u64));
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
         let storage = scene.gi.storage;
         let sizes = buffer_sizes(samples.len(), fold.len(), sets.len(), (ww as usize, wh as usize), n2, storage);
         let mut parts: Vec<Buffer> = Vec::new();
@@ -174,36 +170,11 @@ impl VisibilityPass {
         let sweeps = scene.gi.visibility == VisibilityMethod::Sweep && max_set > 0;
         let push = visibility_push(pyramid, scene, sweeps);
         let made = (|| -> Result<vk::DescriptorSet> {
-            // Texel views (docs/performance.md §17): the samples and the fold's padded rows as
-            // uvec4s (§19), V as words (written here as a storage buffer, read by shade.direct through the view).
-            let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT];
-            for ((name, size), view) in sizes.into_iter().zip(views) {
-                parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
-            }
-            if !samples.is_empty() {
-                memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(&samples))?;
-                memory::upload_f32(ctx, &parts[1], 0, &fold)?;
-            }
+            Self::create_buffers(ctx, &mut parts, sizes, &samples, &fold)?;
             if sweeps {
                 sweep = Some(SweepPass::new(ctx, pyramid, &parts[0], scene, max_set)?);
             }
-            let p = pipeline.insert(ComputePipeline::new(
-                ctx,
-                &shaders::VISIBILITY_VISIBILITY_COMP,
-                &BINDINGS,
-                std::mem::size_of::<VisibilityPush>() as u32,
-                &[
-                    &[
-                        (0, n as u32),
-                        (1, pyramid.layout().count() as u32),
-                        (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
-                    ][..],
-                    &super::shared::static_modes(3, push.stack_mode, push.wrap, push.flags),
-                    &[(6, storage.spec()), (7, super::shared::fold_texels(n, scene.gi.elevation_basis))],
-                ]
-                .concat(),
-                1,
-            )?);
+            let p = pipeline.insert(Self::create_pipeline(ctx, pyramid, scene, &push)?);
             let stack = pyramid.stack_buffer().unwrap_or(pyramid.levels_buffer());
             p.allocate_set(
                 ctx,
@@ -246,6 +217,60 @@ impl VisibilityPass {
             sweep,
             key_offsets,
         })
+    }
+
+    /// Creates the samples, fold and `V` buffers of `sizes` into `parts` (which the caller
+    /// destroys on an error) and uploads `samples` and `fold` (when there are samples).
+    fn create_buffers(
+        ctx: &Context,
+        parts: &mut Vec<Buffer>,
+        sizes: [(&'static str, u64); 3],
+        samples: &[[f32; 4]],
+        fold: &[f32],
+    ) -> Result<()> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        // Texel views (docs/performance.md §17): the samples and the fold's padded rows as
+        // uvec4s (§19), V as words (written here as a storage buffer, read by shade.direct through the view).
+        let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT];
+        for ((name, size), view) in sizes.into_iter().zip(views) {
+            parts.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
+        }
+        if !samples.is_empty() {
+            memory::upload(ctx, &parts[0], 0, bytemuck::cast_slice(samples))?;
+            memory::upload_f32(ctx, &parts[1], 0, fold)?;
+        }
+        Ok(())
+    }
+
+    /// The visibility pipeline, specialised for `scene`'s order, the pyramid's levels and the
+    /// static modes of `push`.
+    fn create_pipeline(
+        ctx: &Context,
+        pyramid: &HeightPyramid,
+        scene: &Scene,
+        push: &VisibilityPush,
+    ) -> Result<ComputePipeline> {
+        let n = scene.gi.sh_order;
+        ComputePipeline::new(
+            ctx,
+            &shaders::VISIBILITY_VISIBILITY_COMP,
+            &BINDINGS,
+            std::mem::size_of::<VisibilityPush>() as u32,
+            &[
+                &[
+                    (0, n as u32),
+                    (1, pyramid.layout().count() as u32),
+                    (2, elevation::gpu_size(scene.gi.elevation_basis, n) as u32),
+                ][..],
+                &super::shared::static_modes(3, push.stack_mode, push.wrap, push.flags),
+                &[(6, scene.gi.storage.spec()), (7, super::shared::fold_texels(n, scene.gi.elevation_basis))],
+            ]
+            .concat(),
+            1,
+        )
     }
 
     /// The samples and fold of the key lights' sets as `(buffer, byte offset, bytes)` for

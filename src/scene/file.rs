@@ -651,9 +651,11 @@ impl Ctx<'_> {
         }
     }
 
+    /// `[heightfield]`: the height field (generated or loaded, then offset), the texel size and
+    /// whether the field wraps.
     fn heightfield(&self, t: Option<&Table>) -> Result<(HeightField, f64, bool)> {
         let raw: RawHeightfield = self.de_opt(t, "heightfield")?;
-        let mut texel = raw.texel_size.unwrap_or(1.0);
+        let texel = raw.texel_size.unwrap_or(1.0);
         let (lo, hi) = limits::TEXEL_SIZE;
         if !(texel.is_finite() && (lo..=hi).contains(&texel)) {
             return Err(self.invalid(
@@ -665,82 +667,103 @@ impl Ctx<'_> {
         let nodata = self.nodata(raw.nodata.as_ref())?;
         let scale = raw.height_scale.unwrap_or(1.0);
         self.finite_f32("heightfield.height_scale", scale, true, "a finite number")?;
-        let field = match (raw.generator, raw.file) {
+        let (field, texel) = match (&raw.generator, &raw.file) {
             (Some(_), Some(_)) => {
                 return Err(
                     self.err(Some("heightfield.file"), "heightfield: give either `generator` or `file`, not both")
                 )
             }
-            (_, Some(file)) => {
-                if raw.size.is_some() {
-                    return Err(self.err(
-                        Some("heightfield.size"),
-                        "heightfield.size applies to generators only; a file's size comes from the file \
-                         (use heightfield.raw_size for .raw/.f32 files)",
-                    ));
-                }
-                let path = self.resolve(&file);
-                let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-                if raw.nodata.is_some() && !matches!(ext.as_deref(), Some("tif") | Some("tiff")) {
-                    return Err(self.err(Some("heightfield.nodata"), NODATA_TIFF_ONLY));
-                }
-                let opts = LoadOptions {
-                    height_scale: scale as f32,
-                    raw_size: raw.raw_size.map(|s| (s.0, s.1)),
-                    max_dim: DEFAULT_MAX_DIM,
-                    nodata,
-                };
-                let (field, meta) =
-                    load_heightfield_meta(&path, &opts).map_err(|e| self.wrap("heightfield.file", e))?;
-                if raw.texel_size.is_none() {
-                    texel = self.pixel_scale(&meta)?.unwrap_or(texel);
-                }
-                field
-            }
-            (generator, None) => {
-                if raw.nodata.is_some() {
-                    return Err(self.err(Some("heightfield.nodata"), NODATA_TIFF_ONLY));
-                }
-                if raw.raw_size.is_some() {
-                    return Err(self.err(
-                        Some("heightfield.raw_size"),
-                        "heightfield.raw_size applies to .raw/.f32 files only (use heightfield.size with a generator)",
-                    ));
-                }
-                let text = generator.as_deref().unwrap_or(DEFAULT_GENERATOR);
-                let gen: Generator = text.parse().map_err(|e| self.wrap("heightfield.generator", e))?;
-                let SizeSpec(w, h) = raw.size.unwrap_or(SizeSpec(DEFAULT_FIELD_SIZE, DEFAULT_FIELD_SIZE));
-                let max = DEFAULT_MAX_DIM as usize;
-                if !(2..=max).contains(&w) || !(2..=max).contains(&h) {
-                    return Err(self.invalid(
-                        "heightfield.size",
-                        fmt_list(&[w as f64, h as f64]),
-                        format!("n or [width, height] with each side in 2..={max}"),
-                    ));
-                }
-                let field = gen.generate(w, h).map_err(|e| self.wrap("heightfield.generator", e))?;
-                // Generated heights are in texel units: world units are × texel size.
-                let factor = texel * scale;
-                if factor == 1.0 {
-                    field
-                } else {
-                    field
-                        .scaled(factor as f32, &format!("generator {gen}"))
-                        .map_err(|e| self.wrap("heightfield.height_scale", e))?
-                }
-            }
+            (_, Some(file)) => self.heightfield_file(&raw, file, scale, nodata, texel)?,
+            (generator, None) => (self.generated_heightfield(&raw, generator.as_deref(), scale, texel)?, texel),
         };
-        let field = match raw.height_offset {
-            None => field,
-            Some(z) => {
-                self.finite_f32("heightfield.height_offset", z, true, "a finite number (world units)")?;
-                let data: Vec<f32> = field.data().iter().map(|&v| (v as f64 + z) as f32).collect();
-                HeightField::new("height_offset", field.width(), field.height(), data, DEFAULT_MAX_DIM)
-                    .map_err(|e| self.wrap("heightfield.height_offset", e))?
-            }
-        };
+        let field = self.height_offset(field, raw.height_offset)?;
         self.height_magnitudes(&field)?;
         Ok((field, texel, raw.wrap.unwrap_or(false)))
+    }
+
+    /// `heightfield.file`, loaded with `scale` and `nodata`, and the texel size: `texel`, or the
+    /// file's pixel scale when `heightfield.texel_size` is absent and the file has one.
+    fn heightfield_file(
+        &self,
+        raw: &RawHeightfield,
+        file: &Path,
+        scale: f64,
+        nodata: NoData,
+        texel: f64,
+    ) -> Result<(HeightField, f64)> {
+        if raw.size.is_some() {
+            return Err(self.err(
+                Some("heightfield.size"),
+                "heightfield.size applies to generators only; a file's size comes from the file \
+                 (use heightfield.raw_size for .raw/.f32 files)",
+            ));
+        }
+        let path = self.resolve(file);
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        if raw.nodata.is_some() && !matches!(ext.as_deref(), Some("tif") | Some("tiff")) {
+            return Err(self.err(Some("heightfield.nodata"), NODATA_TIFF_ONLY));
+        }
+        let opts = LoadOptions {
+            height_scale: scale as f32,
+            raw_size: raw.raw_size.map(|s| (s.0, s.1)),
+            max_dim: DEFAULT_MAX_DIM,
+            nodata,
+        };
+        let (field, meta) = load_heightfield_meta(&path, &opts).map_err(|e| self.wrap("heightfield.file", e))?;
+        if raw.texel_size.is_none() {
+            return Ok((field, self.pixel_scale(&meta)?.unwrap_or(texel)));
+        }
+        Ok((field, texel))
+    }
+
+    /// The height field of `generator` (default [`DEFAULT_GENERATOR`]) at `heightfield.size`,
+    /// its heights (texel units) scaled to world units by `texel · scale`.
+    fn generated_heightfield(
+        &self,
+        raw: &RawHeightfield,
+        generator: Option<&str>,
+        scale: f64,
+        texel: f64,
+    ) -> Result<HeightField> {
+        if raw.nodata.is_some() {
+            return Err(self.err(Some("heightfield.nodata"), NODATA_TIFF_ONLY));
+        }
+        if raw.raw_size.is_some() {
+            return Err(self.err(
+                Some("heightfield.raw_size"),
+                "heightfield.raw_size applies to .raw/.f32 files only (use heightfield.size with a generator)",
+            ));
+        }
+        let text = generator.unwrap_or(DEFAULT_GENERATOR);
+        let gen: Generator = text.parse().map_err(|e| self.wrap("heightfield.generator", e))?;
+        let SizeSpec(w, h) = raw.size.unwrap_or(SizeSpec(DEFAULT_FIELD_SIZE, DEFAULT_FIELD_SIZE));
+        let max = DEFAULT_MAX_DIM as usize;
+        if !(2..=max).contains(&w) || !(2..=max).contains(&h) {
+            return Err(self.invalid(
+                "heightfield.size",
+                fmt_list(&[w as f64, h as f64]),
+                format!("n or [width, height] with each side in 2..={max}"),
+            ));
+        }
+        let field = gen.generate(w, h).map_err(|e| self.wrap("heightfield.generator", e))?;
+        // Generated heights are in texel units: world units are × texel size.
+        let factor = texel * scale;
+        if factor == 1.0 {
+            Ok(field)
+        } else {
+            field
+                .scaled(factor as f32, &format!("generator {gen}"))
+                .map_err(|e| self.wrap("heightfield.height_scale", e))
+        }
+    }
+
+    /// `heightfield.height_offset` (world units), when given, added to every height.
+    fn height_offset(&self, field: HeightField, offset: Option<f64>) -> Result<HeightField> {
+        let Some(z) = offset else { return Ok(field) };
+        self.finite_f32("heightfield.height_offset", z, true, "a finite number (world units)")?;
+        let data: Vec<f32> = field.data().iter().map(|&v| (v as f64 + z) as f32).collect();
+        HeightField::new("height_offset", field.width(), field.height(), data, DEFAULT_MAX_DIM)
+            .map_err(|e| self.wrap("heightfield.height_offset", e))
     }
 
     /// Every height within ±[`limits::MAX_HEIGHT`] (after `height_scale` and `height_offset`).
@@ -1221,6 +1244,12 @@ impl Ctx<'_> {
                 ),
             ));
         }
+        self.animation_params(&raw, kind, wrap)
+    }
+
+    /// The parameters of animation `kind` (not `"none"`) from `raw`, defaults for the keys not
+    /// given, validated.
+    fn animation_params(&self, raw: &RawAnimation, kind: &str, wrap: bool) -> Result<Animation> {
         let check = |e: Error| self.wrap("animation", e);
         if kind == "water" {
             let d = WaterParams::default();
@@ -1264,7 +1293,7 @@ impl Ctx<'_> {
                 amplitude: raw.amplitude.unwrap_or(d.amplitude),
                 period: raw.period.unwrap_or(d.period),
                 travel: raw.travel.unwrap_or(d.travel),
-                shape: raw.shape.map(|s| s.parse::<BumpShape>()).transpose().map_err(check)?.unwrap_or(d.shape),
+                shape: raw.shape.as_deref().map(str::parse::<BumpShape>).transpose().map_err(check)?.unwrap_or(d.shape),
             };
             p.validate().map_err(check)?;
             Ok(Animation::Bumps(p))

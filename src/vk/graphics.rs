@@ -52,6 +52,72 @@ pub struct GraphicsPipeline {
     push_size: u32,
 }
 
+/// The `vkCreateGraphicsPipelines` call of [`GraphicsPipeline::new`]: `desc`'s fixed-function
+/// state (no vertex input, no culling, no blending, static viewport) with the `(vertex,
+/// fragment)` shader modules and `layout`, for dynamic rendering with `desc`'s formats.
+fn create_pipeline(
+    ctx: &Context,
+    desc: &GraphicsDesc,
+    layout: vk::PipelineLayout,
+    (vertex, fragment): (vk::ShaderModule, vk::ShaderModule),
+) -> Result<vk::Pipeline> {
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vertex).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fragment)
+            .name(c"main"),
+    ];
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+    let viewports = [vk::Viewport {
+        x: 0.0,
+        y: 0.0,
+        width: desc.extent.width as f32,
+        height: desc.extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    }];
+    let scissors = [vk::Rect2D { offset: vk::Offset2D::default(), extent: desc.extent }];
+    let viewport = vk::PipelineViewportStateCreateInfo::default().viewports(&viewports).scissors(&scissors);
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(desc.samples);
+    let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(desc.depth_format.is_some())
+        .depth_write_enable(desc.depth_format.is_some())
+        .depth_compare_op(desc.depth_compare)
+        .max_depth_bounds(1.0);
+    let attachments = [vk::PipelineColorBlendAttachmentState::default().color_write_mask(
+        vk::ColorComponentFlags::R
+            | vk::ColorComponentFlags::G
+            | vk::ColorComponentFlags::B
+            | vk::ColorComponentFlags::A,
+    )];
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+    let color_formats = [desc.color_format];
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(&color_formats)
+        .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+    let ci = [vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .layout(layout)
+        .push_next(&mut rendering)];
+    ctx.count_pipeline();
+    let made = unsafe { ctx.device().create_graphics_pipelines(ctx.pipeline_cache(), &ci, None) };
+    Ok(made.map_err(|(_, e)| Error::Vulkan { call: "vkCreateGraphicsPipelines", result: e })?[0])
+}
+
 impl GraphicsPipeline {
     /// Builds the pipeline for dynamic rendering with the formats of `desc`.
     pub fn new(ctx: &Context, desc: &GraphicsDesc) -> Result<Self> {
@@ -73,64 +139,7 @@ impl GraphicsPipeline {
                     .vk("vkCreateShaderModule")?;
                 modules.push(m);
             }
-            let stages = [
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::VERTEX)
-                    .module(modules[0])
-                    .name(c"main"),
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::FRAGMENT)
-                    .module(modules[1])
-                    .name(c"main"),
-            ];
-            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-            let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
-            let viewports = [vk::Viewport {
-                x: 0.0,
-                y: 0.0,
-                width: desc.extent.width as f32,
-                height: desc.extent.height as f32,
-                min_depth: 0.0,
-                max_depth: 1.0,
-            }];
-            let scissors = [vk::Rect2D { offset: vk::Offset2D::default(), extent: desc.extent }];
-            let viewport = vk::PipelineViewportStateCreateInfo::default().viewports(&viewports).scissors(&scissors);
-            let raster = vk::PipelineRasterizationStateCreateInfo::default()
-                .polygon_mode(vk::PolygonMode::FILL)
-                .cull_mode(vk::CullModeFlags::NONE)
-                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-                .line_width(1.0);
-            let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(desc.samples);
-            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-                .depth_test_enable(desc.depth_format.is_some())
-                .depth_write_enable(desc.depth_format.is_some())
-                .depth_compare_op(desc.depth_compare)
-                .max_depth_bounds(1.0);
-            let attachments = [vk::PipelineColorBlendAttachmentState::default().color_write_mask(
-                vk::ColorComponentFlags::R
-                    | vk::ColorComponentFlags::G
-                    | vk::ColorComponentFlags::B
-                    | vk::ColorComponentFlags::A,
-            )];
-            let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
-            let color_formats = [desc.color_format];
-            let mut rendering = vk::PipelineRenderingCreateInfo::default()
-                .color_attachment_formats(&color_formats)
-                .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
-            let ci = [vk::GraphicsPipelineCreateInfo::default()
-                .stages(&stages)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&assembly)
-                .viewport_state(&viewport)
-                .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&depth)
-                .color_blend_state(&blend)
-                .layout(me.layout)
-                .push_next(&mut rendering)];
-            ctx.count_pipeline();
-            let made = unsafe { d.create_graphics_pipelines(ctx.pipeline_cache(), &ci, None) };
-            me.pipeline = made.map_err(|(_, e)| Error::Vulkan { call: "vkCreateGraphicsPipelines", result: e })?[0];
+            me.pipeline = create_pipeline(ctx, desc, me.layout, (modules[0], modules[1]))?;
             ctx.set_name(me.pipeline, &me.name);
             me.pool = create_pool(ctx, desc.kinds, desc.max_sets)?;
             Ok(())
