@@ -352,10 +352,7 @@ impl IndirectPass {
     /// Creates the scan's own buffers of `sizes` ([`buffer_sizes`]' order) with their texel
     /// views ([`BUFFER_VIEWS`]) into `bufs`, which the caller destroys on an error.
     fn create_buffers(ctx: &Context, bufs: &mut Vec<Buffer>, sizes: [(&'static str, u64); 5]) -> Result<()> {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let usage = crate::vk::memory::PASS_BUFFER_USAGE;
         for ((name, size), view) in sizes.into_iter().zip(BUFFER_VIEWS) {
             bufs.push(Buffer::new(ctx, name, size, usage, MemoryLocation::GpuOnly)?.with_texel_view(ctx, view)?);
         }

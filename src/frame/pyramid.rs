@@ -413,10 +413,7 @@ impl Parts {
     /// them, the scans the stack and its planes (in pyramid mode, with no stack, the levels and
     /// the table in their place).
     fn make(&mut self, ctx: &Context, kind: PyramidKind, sizes: &PyramidBuffers, at: LevelsMemory) -> Result<()> {
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let storage = crate::vk::memory::PASS_BUFFER_USAGE;
         let table_entries = table_entries(&sizes.layout, kind, 0.0);
         let lv = self.levels.insert(create_levels(ctx, &buffer_name(kind, "levels"), sizes.levels, storage, at)?);
         let tb = self.table.insert(

@@ -345,10 +345,7 @@ impl ShadePass {
     /// Creates into `bufs` (which the caller destroys on an error) the uploaded buffers of
     /// `data` ([`upload_sizes`] order), then the output buffer (cleared) and the incident buffer.
     fn create_buffers(ctx: &Context, bufs: &mut Vec<Buffer>, scene: &Scene, data: &ShadeData) -> Result<()> {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let usage = crate::vk::memory::PASS_BUFFER_USAGE;
         // Texel views of the light (vec4s) and the triple table (uvec2s), docs/performance.md §17.
         let views = [Some(vk::Format::R32G32B32A32_UINT), Some(vk::Format::R32G32_UINT), None, None];
         for (((name, size), bytes), view) in upload_sizes(scene).into_iter().zip(data.uploads()).zip(views) {

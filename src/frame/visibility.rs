@@ -228,10 +228,7 @@ impl VisibilityPass {
         samples: &[[f32; 4]],
         fold: &[f32],
     ) -> Result<()> {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let usage = crate::vk::memory::PASS_BUFFER_USAGE;
         // Texel views (docs/performance.md §17): the samples and the fold's padded rows as
         // uvec4s (§19), V as words (written here as a storage buffer, read by shade.direct through the view).
         let views = [vk::Format::R32G32B32A32_UINT, vk::Format::R32G32B32A32_UINT, vk::Format::R32_UINT];

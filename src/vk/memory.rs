@@ -8,6 +8,16 @@ use gpu_allocator::MemoryLocation;
 use super::Context;
 use crate::error::{Error, Result, VkCall};
 
+/// The usage of the passes' storage buffers: written by a shader, read through a texel view
+/// ([`Buffer::with_texel_view`]; docs/integration.md, "buffer views"), filled by an upload or
+/// cleared (`TRANSFER_DST`), and copied from (`TRANSFER_SRC`: readbacks).
+pub const PASS_BUFFER_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::STORAGE_BUFFER.as_raw()
+        | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_DST.as_raw()
+        | vk::BufferUsageFlags::TRANSFER_SRC.as_raw(),
+);
+
 /// A buffer and its memory. Destroy it with [`Buffer::destroy`]; hfgi never frees it implicitly.
 pub struct Buffer {
     pub raw: vk::Buffer,
