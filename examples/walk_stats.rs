@@ -15,7 +15,8 @@
 //! that holds every texel a later read reaches through the stack's filters (sized for `k = 4`,
 //! `o = 6`; no wrap). Then the lane occupancy — the lanes' work over the work of every lane
 //! running as long as its group's busiest — of the 4 × 2 blocks of `hfgi_receiver` (lavapipe's
-//! SIMD lanes) and of four other assignments of rays to lanes.
+//! SIMD lanes), of four other assignments of rays to lanes, and of lanes on lines of 8
+//! receivers: rows, lines along each azimuth, lines across it (docs/performance.md §31).
 use std::f64::consts::PI;
 use std::io::Write;
 use std::path::Path;
@@ -161,7 +162,7 @@ fn walk_all(scene: &Scene, bounds: bool) -> Result<(Rays, [f64; 6]), Box<dyn std
     let (mut sum, mut rays) = ([0f64; 6], 0f64);
     let mut per = Vec::new();
     for j in 0..m {
-        let phi = 2.0 * PI * j as f64 / m as f64;
+        let phi = 2.0 * PI * (j as f64 + gi.azimuth_offset) / m as f64;
         let d = [phi.cos(), phi.sin()];
         let plane = Ahead::new(l0, w, h, d, None);
         let mut blocks = Vec::new();
@@ -236,6 +237,53 @@ fn report_lanes(out: &mut impl Write, per: &[Vec<Vec<Ray>>]) -> std::io::Result<
     Ok(())
 }
 
+/// The work of receiver (x, y)'s ray of azimuth j (`per`'s 4 × 2 blocks, full blocks only).
+fn at(per: &[Vec<Vec<Ray>>], w: usize, j: usize, x: usize, y: usize) -> [u32; 2] {
+    let r = &per[j][(y / 2) * w.div_ceil(4) + x / 4][(x % 4) + 4 * (y % 2)];
+    [r.global, r.members]
+}
+
+/// Lanes as 8 receivers on a row or a column: of every azimuth a row, or per azimuth the axis
+/// nearer its direction (the lanes' rays run along one line), or the axis nearer the
+/// perpendicular (their rays run side by side).
+fn report_aligned(
+    out: &mut impl Write,
+    per: &[Vec<Vec<Ray>>],
+    w: usize,
+    h: usize,
+    phis: &[f64],
+) -> std::io::Result<()> {
+    // The axis nearer the direction φ: rows (1, 0) or columns (0, 1).
+    let axis = |phi: f64| if phi.cos().abs() >= phi.sin().abs() { (1, 0) } else { (0, 1) };
+    let modes = [("rows of 8 (every azimuth)", 0), ("rows or columns of 8 along the azimuth", 1), ("… across it", 2)];
+    for (name, mode) in modes {
+        let groups = (0..per.len()).flat_map(|j| {
+            let step = match mode {
+                0 => (1, 0),
+                1 => axis(phis[j]),
+                _ => axis(phis[j] + 0.5 * PI),
+            };
+            let mut gs: Vec<Vec<[u32; 2]>> = Vec::new();
+            if step == (0, 1) {
+                for x in 0..w {
+                    for y0 in (0..h).step_by(8) {
+                        gs.push((y0..(y0 + 8).min(h)).map(|y| at(per, w, j, x, y)).collect());
+                    }
+                }
+            } else {
+                for y in 0..h {
+                    for x0 in (0..w).step_by(8) {
+                        gs.push((x0..(x0 + 8).min(w)).map(|x| at(per, w, j, x, y)).collect());
+                    }
+                }
+            }
+            gs
+        });
+        writeln!(out, "    {name}: {}", occupancy(groups))?;
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let path = args.get(1).ok_or("usage: walk_stats SCENE [--bounds] [KEY=VALUE ...]")?;
@@ -252,5 +300,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     writeln!(out, "  up to the last member (oracle) {o:.1}; members of the probed walk per ray {mem:.2}")?;
     report_lanes(&mut out, &per)?;
+    let m = per.len();
+    let phis: Vec<f64> = (0..m).map(|j| 2.0 * PI * (j as f64 + scene.gi.azimuth_offset) / m as f64).collect();
+    report_aligned(&mut out, &per, w, h, &phis)?;
     Ok(())
 }
