@@ -136,7 +136,7 @@ pub(super) struct RawCamera {
     pub(super) exposure: Option<f64>,
 }
 
-/// `[animation]`: the keys of every kind; [`Ctx::animation`] rejects those of another kind.
+/// `[animation]`: the keys of every kind; [`Ctx::animation`](super::ctx::Ctx::animation) rejects those of another kind.
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RawAnimation {
