@@ -4,20 +4,23 @@
 //! frames after warm-up), the GPU memory, and the relative L2 error per layer against both
 //! ground truths; it also times the brute-force reference on the same scene.
 
-use std::fmt::Write as _;
+mod output;
+mod sweep;
+
 use std::path::PathBuf;
 
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use hfgi::frame::Renderer;
 use hfgi::reference::truth::{TruthOutput, TruthSettings};
-use hfgi::scene::model::{
-    BlockerExp, BlockerKeyLights, BlockerLogCap, BlockerShading, GiSettings, Horizon, Interpolation, Level0,
-    PyramidMode, Quality, Scene, VisibilityMethod,
-};
+use hfgi::scene::model::{GiSettings, Scene};
 use hfgi::vk::{Context, Recorder, StageTimer};
 
-use super::{context, load_scene_or_default, plot, DeviceArgs};
+use super::{context, load_scene_or_default, DeviceArgs};
+
+pub(crate) use output::azimuths_label;
+use output::write_outputs;
+use sweep::{ablation, configs};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -121,166 +124,6 @@ struct Row {
     shvis: [f64; 3],
 }
 
-/// The configurations: the baseline, then one knob at a time, the four presets, then (full
-/// sweep) the m × k grid; swept horizons (`gi.visibility = "sweep"`) unless the field wraps;
-/// the local lights' azimuths when the scene has local lights; the sphere blockers' settings
-/// when it has spheres.
-fn configs(base: &GiSettings, quick: bool, base_wraps: bool, content: Content) -> Vec<(String, GiSettings)> {
-    let mut c = Configs { base, out: vec![("baseline".to_string(), base.clone())] };
-    c.knobs(quick);
-    // Swept horizons (docs/direct.md §7), at the default near reach and along it.
-    if !base_wraps {
-        c.sweep(quick);
-    }
-    if content.spheres {
-        c.blockers();
-    }
-    if content.local_lights {
-        let ks: &[u32] = if quick { &[4] } else { &[2, 4, 8, 16, 32] };
-        for &k in ks {
-            c.push("local_light_azimuths", &|g| g.local_light_azimuths = k);
-        }
-    }
-    // The presets, marked on the Pareto plot (one group each).
-    for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {
-        c.push(&format!("quality={q}"), &|g| *g = base.with_quality(q));
-    }
-    if !quick {
-        for m in [8, 16, 32, 64, 128] {
-            for k in [1, 2, 4, 8] {
-                c.push("grid m×k", &|g| {
-                    g.azimuths = m;
-                    g.level_step = k;
-                });
-            }
-        }
-    }
-    c.out
-}
-
-/// The configurations of [`configs`] as they are listed, around `base`.
-struct Configs<'a> {
-    base: &'a GiSettings,
-    out: Vec<(String, GiSettings)>,
-}
-
-impl Configs<'_> {
-    /// `base` changed by `f`, under `knob`, unless it is `base` or listed already.
-    fn push(&mut self, knob: &str, f: &dyn Fn(&mut GiSettings)) {
-        let mut g = self.base.clone();
-        f(&mut g);
-        if g != *self.base && !self.out.iter().any(|(_, o)| *o == g) {
-            self.out.push((knob.to_string(), g));
-        }
-    }
-
-    /// The scan's and the shading's knobs, one at a time.
-    fn knobs(&mut self, quick: bool) {
-        let ms: &[u32] = if quick { &[8, 16] } else { &[4, 8, 16, 32, 64, 128] };
-        for &m in ms {
-            self.push("azimuths", &|g| g.azimuths = m);
-        }
-        // The later bounces' azimuths (at most m; docs/performance.md §12).
-        let later: &[u32] = if quick { &[8] } else { &[4, 8, 16, 32, 64] };
-        for &m in later {
-            self.push("azimuths_later", &|g| g.azimuths_later = m);
-        }
-        let ks: &[u32] = if quick { &[2] } else { &[1, 2, 4, 8, 16] };
-        for &k in ks {
-            self.push("level_step", &|g| g.level_step = k);
-        }
-        let os: &[u32] = if quick { &[0] } else { &[0, 1, 2, 3, 4, 5, 6, 8] };
-        for &o in os {
-            self.push("level_offset", &|g| g.level_offset = o);
-        }
-        if !quick {
-            for o in [0, 2, 4, 6] {
-                self.push("radiance_level_offset", &|g| g.radiance_level_offset = o);
-            }
-        }
-        for s in [1, 2, 4] {
-            self.push("subsample", &|g| g.subsample = s);
-        }
-        for i in [Interpolation::Linear, Interpolation::Bspline] {
-            self.push("interpolation", &|g| g.interpolation = i);
-        }
-        let ns: &[usize] = if quick { &[3] } else { &[3, 4, 5, 6] };
-        for &n in ns {
-            self.push("sh_order", &|g| g.sh_order = n);
-        }
-        for p in [PyramidMode::Stack, PyramidMode::Pyramid] {
-            self.push("pyramid", &|g| g.pyramid = p);
-        }
-        for b in 0..=3 {
-            self.push("bounces", &|g| g.bounces = b);
-        }
-    }
-
-    /// Swept horizons, and their near reach.
-    fn sweep(&mut self, quick: bool) {
-        self.push("visibility", &|g| g.visibility = VisibilityMethod::Sweep);
-        let rs: &[u32] = if quick { &[0] } else { &[0, 4, 8, 32, 64] };
-        for &r in rs {
-            self.push("sweep_near", &|g| {
-                g.visibility = VisibilityMethod::Sweep;
-                g.sweep_near = r;
-            });
-        }
-    }
-
-    /// The sphere blockers' settings.
-    fn blockers(&mut self) {
-        let base = self.base;
-        for e in [0.05, 0.1, 0.2, 0.5] {
-            self.push("blocker_epsilon", &|g| g.blocker_epsilon = e);
-        }
-        self.push("blocker_ratio", &|g| g.blocker_ratio = !base.blocker_ratio);
-        for x in [BlockerExp::Quadrature, BlockerExp::Linear] {
-            self.push("blocker_exp", &|g| g.blocker_exp = x);
-        }
-        for m in [BlockerShading::Log, BlockerShading::LogField, BlockerShading::LogBrdf, BlockerShading::Primal] {
-            self.push("blocker_shading", &|g| g.blocker_shading = m);
-        }
-        self.push("blocker_log_cap", &|g| g.blocker_log_cap = BlockerLogCap::Matched);
-        self.push("blocker_key_lights", &|g| g.blocker_key_lights = BlockerKeyLights::Product);
-        for m in [BlockerShading::LogField, BlockerShading::LogBrdf] {
-            self.push("blocker_log_cap", &|g| {
-                g.blocker_log_cap = BlockerLogCap::Matched;
-                g.blocker_shading = m;
-            });
-        }
-    }
-}
-
-fn with_preset(scene: &GiSettings, preset: Quality) -> GiSettings {
-    scene.with_quality(preset)
-}
-
-/// The ablation of docs/accuracy.md §4: the paper, each fix alone on the paper's settings, all
-/// fixes (the `default` preset); then the preset ladder.
-fn ablation(base: &GiSettings, presets_only: bool) -> Vec<(String, GiSettings)> {
-    let paper = with_preset(base, Quality::Paper);
-    let mut out = vec![("paper".to_string(), paper.clone())];
-    if !presets_only {
-        let all = with_preset(base, Quality::Default);
-        let fix = |name: &str, f: &dyn Fn(&mut GiSettings)| {
-            let mut g = paper.clone();
-            f(&mut g);
-            (name.to_string(), g)
-        };
-        out.push(fix("level0=bilinear", &|g| g.level0 = all.level0));
-        out.push(fix("horizon=samples", &|g| g.horizon = all.horizon));
-        out.push(fix(&format!("near_steps={}", all.near_steps), &|g| g.near_steps = all.near_steps));
-        out.push(fix("scan_reach=diagonal", &|g| g.scan_reach = all.scan_reach));
-        out.push(fix("omega_min=tangent", &|g| g.omega_min = all.omega_min));
-        out.push(fix("elevation_basis=legendre", &|g| g.elevation_basis = all.elevation_basis));
-    }
-    for q in [Quality::Draft, Quality::Default, Quality::High, Quality::Ultra] {
-        out.push((format!("quality={q}"), with_preset(base, q)));
-    }
-    out
-}
-
 /// Relative L2 (CONVENTIONS.md) of `x` against the reference `r`; NaN where `r` is zero.
 fn rel_l2(x: &[[f32; 3]], r: &[[f64; 3]]) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
@@ -295,34 +138,6 @@ fn rel_l2(x: &[[f32; 3]], r: &[[f64; 3]]) -> f64 {
     } else {
         f64::NAN
     }
-}
-
-/// Per-stage times of the paper's settings and the presets (columns), if the sweep has them.
-fn stage_table(md: &mut String, rows: Vec<&Row>) {
-    let cols: Vec<&Row> = rows.into_iter().filter(|r| r.knob == "paper" || r.knob.starts_with("quality=")).collect();
-    if cols.is_empty() {
-        return;
-    }
-    let mut stages: Vec<&str> = Vec::new();
-    for r in &cols {
-        for (n, _) in &r.stages {
-            if !stages.contains(&n.as_str()) {
-                stages.push(n);
-            }
-        }
-    }
-    let _ = writeln!(md, "\nTime per stage (ms) of the paper's settings and the presets:\n");
-    let _ = writeln!(md, "| stage | {} |", cols.iter().map(|r| r.knob.as_str()).collect::<Vec<_>>().join(" | "));
-    let _ = writeln!(md, "|---|{}", "---|".repeat(cols.len()));
-    for st in stages {
-        let cells: Vec<String> = cols
-            .iter()
-            .map(|r| r.stages.iter().find(|(n, _)| n == st).map_or("—".into(), |(_, ms)| format!("{ms:.2}")))
-            .collect();
-        let _ = writeln!(md, "| {st} | {} |", cells.join(" | "));
-    }
-    let totals: Vec<String> = cols.iter().map(|r| format!("**{:.1}**", r.total_ms)).collect();
-    let _ = writeln!(md, "| **frame** | {} |", totals.join(" | "));
 }
 
 /// A scene's ground truths at each SH order: (order, exact, exact ms, SH-visibility unless
@@ -447,60 +262,6 @@ pub(crate) fn measure(ctx: &Context, scene: &Scene, frames: u32) -> Result<Measu
     r.destroy(ctx);
     let layers = run?;
     Ok((per_stage.into_iter().map(|(n, mut v)| (n, super::median(&mut v))).collect(), memory, layers))
-}
-
-fn settings_label(g: &GiSettings) -> String {
-    let fixes = if g.level0 == Level0::Bspline && g.near_steps == 0 && g.horizon == Horizon::Bspline {
-        String::new()
-    } else {
-        format!(" l0={} hz={} near={} reach={} ωmin={}", g.level0, g.horizon, g.near_steps, g.scan_reach, g.omega_min)
-    };
-    let probes = if g.radial_probes > 0 || g.radial_probes_later > 0 {
-        format!(" probes={}/{}", g.radial_probes, g.radial_probes_later)
-    } else {
-        String::new()
-    };
-    let sweep = match g.visibility {
-        VisibilityMethod::Sweep => format!(" sweep near={}", g.sweep_near),
-        VisibilityMethod::Ladder => String::new(),
-    };
-    let d = GiSettings::default();
-    let blockers = if (g.blocker_epsilon, g.blocker_ratio, g.blocker_exp, g.blocker_shading, g.blocker_log_cap)
-        != (d.blocker_epsilon, d.blocker_ratio, d.blocker_exp, d.blocker_shading, d.blocker_log_cap)
-        || g.blocker_key_lights != d.blocker_key_lights
-    {
-        format!(
-            " ε={} ratio={} exp={} {} cap={} keys={}",
-            g.blocker_epsilon,
-            g.blocker_ratio,
-            g.blocker_exp,
-            g.blocker_shading,
-            g.blocker_log_cap,
-            g.blocker_key_lights
-        )
-    } else {
-        String::new()
-    };
-    let default_local = d.local_light_azimuths;
-    let local = if g.local_light_azimuths != default_local {
-        format!(" local_az={}", g.local_light_azimuths)
-    } else {
-        String::new()
-    };
-    let m = azimuths_label(g);
-    format!(
-        "n={} m={m} k={} o={} s={} {} {} b={}{fixes}{probes}{sweep}{local}{blockers}",
-        g.sh_order, g.level_step, g.level_offset, g.subsample, g.interpolation, g.pyramid, g.bounces
-    )
-}
-
-/// `m`, or `m/m_later` when the later bounces scan with fewer azimuths (`gi.azimuths_later`):
-/// the bench's labels and `hfgi render`'s settings line.
-pub(crate) fn azimuths_label(g: &GiSettings) -> String {
-    match g.scan_azimuths(2) {
-        later if g.bounces > 1 && later != g.azimuths => format!("{}/{later}", g.azimuths),
-        _ => g.azimuths.to_string(),
-    }
 }
 
 /// Most timed frames per configuration (the median of a few is what the bench reports).
@@ -629,183 +390,4 @@ fn measure_row(
     let v = shvis.as_ref().map_or([f64::NAN; 3], |t| err(&truth_layers(t, gi.bounces)));
     let total_ms = stages.iter().map(|(_, ms)| ms).sum();
     Ok(Row { scene: name.to_string(), knob, gi, stages, total_ms, memory, exact: err(&e), shvis: v })
-}
-
-fn write_outputs(
-    a: &BenchArgs,
-    rows: &[Row],
-    references: &[(String, Option<f64>, Option<f64>)],
-    info: &hfgi::vk::DeviceInfo,
-    clock: &str,
-) -> Result<()> {
-    let csv_path = a.out.join("results.csv");
-    hfgi::io::atomic::write_bytes(&csv_path, results_csv(rows, info).as_bytes())?;
-
-    // Markdown: per scene, the table; the reference times; the m × k grid.
-    let mut md = String::new();
-    let _ = writeln!(
-        md,
-        "Device: {} ({}), times: {clock}, field {}, {} timed frames (median) after 1 warm-up.\n",
-        info.name,
-        info.driver,
-        a.size_label(),
-        a.frames
-    );
-    for (scene, ex, sv) in references {
-        scene_table(&mut md, rows, (scene, ex, sv), clock);
-        stage_table(&mut md, rows.iter().filter(|r| &r.scene == scene).collect());
-        grid_table(&mut md, rows, scene);
-        // Error against time, Pareto front marked.
-        pareto_plot(a, rows, scene, *ex, clock)?;
-        let _ = writeln!(md, "\n![{scene}: error against time](pareto-{scene}.png)\n");
-    }
-    let md_path = a.out.join("results.md");
-    hfgi::io::atomic::write_bytes(&md_path, md.as_bytes())?;
-    eprintln!("wrote {}, {} and the plots", csv_path.display(), md_path.display());
-    Ok(())
-}
-
-/// An error for the Markdown tables: `1.2345e-3`, or "—" where it is not finite.
-fn fmt_e(e: f64) -> String {
-    if e.is_finite() {
-        format!("{e:.4e}")
-    } else {
-        "—".into()
-    }
-}
-
-/// results.csv: one row per configuration.
-fn results_csv(rows: &[Row], info: &hfgi::vk::DeviceInfo) -> String {
-    let mut csv = String::from(
-        "scene,knob,sh_order,azimuths,level_step,level_offset,subsample,interpolation,pyramid,bounces,total_ms,\
-         memory_bytes,exact_direct,exact_indirect,exact_total,shvis_direct,shvis_indirect,shvis_total,stages,device,driver,knobs\n",
-    );
-    for r in rows {
-        let g = &r.gi;
-        let stages: Vec<String> = r.stages.iter().map(|(n, ms)| format!("{n}={ms:.4}")).collect();
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{},{},{},{},\"{}\",\"{}\",\"{}\"",
-            r.scene,
-            r.knob,
-            g.sh_order,
-            g.azimuths,
-            g.level_step,
-            g.level_offset,
-            g.subsample,
-            g.interpolation,
-            g.pyramid,
-            g.bounces,
-            r.total_ms,
-            r.memory,
-            r.exact[0],
-            r.exact[1],
-            r.exact[2],
-            r.shvis[0],
-            r.shvis[1],
-            r.shvis[2],
-            stages.join(";"),
-            info.name,
-            info.driver,
-            g.describe()
-        );
-    }
-    csv
-}
-
-/// A scene's section of results.md: its reference times (`ex`, `sv`: exact and SH-visibility)
-/// and one table row per configuration.
-fn scene_table(md: &mut String, rows: &[Row], (scene, ex, sv): (&str, &Option<f64>, &Option<f64>), clock: &str) {
-    let t = |v: &Option<f64>| v.map_or("no timestamps".into(), |ms| format!("{ms:.1} ms"));
-    let _ =
-        writeln!(md, "### {scene}\n\nBrute-force reference: exact {}, SH-visibility {} ({}).\n", t(ex), t(sv), clock);
-    let _ = writeln!(
-        md,
-        "| knob | settings | time (ms) | speed-up vs exact reference | memory (MiB) | err exact: direct / indirect / total | err SH-vis: direct / indirect / total |\n|---|---|---|---|---|---|---|"
-    );
-    for r in rows.iter().filter(|r| r.scene == scene) {
-        let speed = ex.map_or("—".into(), |ms| format!("{:.0}×", ms / r.total_ms));
-        let _ = writeln!(
-            md,
-            "| {} | {} | {:.2} | {} | {:.2} | {} / {} / {} | {} / {} / {} |",
-            r.knob,
-            settings_label(&r.gi),
-            r.total_ms,
-            speed,
-            r.memory as f64 / 1048576.0,
-            fmt_e(r.exact[0]),
-            fmt_e(r.exact[1]),
-            fmt_e(r.exact[2]),
-            fmt_e(r.shvis[0]),
-            fmt_e(r.shvis[1]),
-            fmt_e(r.shvis[2])
-        );
-    }
-}
-
-/// Figure 10: total error against the exact reference as m and k grow, where the sweep of
-/// `scene` has the m × k grid.
-fn grid_table(md: &mut String, rows: &[Row], scene: &str) {
-    // Every row that differs from the baseline in m and k only (the grid, the baseline and
-    // the single-knob rows of m and k).
-    let base = rows.iter().find(|r| r.scene == scene && r.knob == "baseline").map(|r| r.gi.clone());
-    let grid: Vec<&Row> = rows
-        .iter()
-        .filter(|r| {
-            r.scene == scene
-                && base.as_ref().is_some_and(|b| {
-                    GiSettings { azimuths: b.azimuths, level_step: b.level_step, ..r.gi.clone() } == *b
-                })
-        })
-        .collect();
-    if rows.iter().any(|r| r.scene == scene && r.knob == "grid m×k") {
-        let mut ms: Vec<u32> = grid.iter().map(|r| r.gi.azimuths).collect();
-        ms.sort();
-        ms.dedup();
-        let mut ks: Vec<u32> = grid.iter().map(|r| r.gi.level_step).collect();
-        ks.sort();
-        ks.dedup();
-        let _ = writeln!(md, "\nTotal error against the exact reference (figure 10): rows m, columns k.\n");
-        let _ = writeln!(md, "| m \\ k | {} |", ks.iter().map(|k| k.to_string()).collect::<Vec<_>>().join(" | "));
-        let _ = writeln!(md, "|---|{}", "---|".repeat(ks.len()));
-        for m in &ms {
-            let cells: Vec<String> = ks
-                .iter()
-                .map(|k| {
-                    grid.iter()
-                        .find(|r| r.gi.azimuths == *m && r.gi.level_step == *k)
-                        .map_or("—".into(), |r| format!("{} ({:.1} ms)", fmt_e(r.exact[2]), r.total_ms))
-                })
-                .collect();
-            let _ = writeln!(md, "| {m} | {} |", cells.join(" | "));
-        }
-    }
-}
-
-/// pareto-<scene>.png: the total error of `scene`'s configurations against their time, the
-/// exact reference's time `ex` marked.
-fn pareto_plot(a: &BenchArgs, rows: &[Row], scene: &str, ex: Option<f64>, clock: &str) -> Result<()> {
-    let points: Vec<plot::Point> = rows
-        .iter()
-        .filter(|r| r.scene == scene)
-        .map(|r| plot::Point {
-            label: settings_label(&r.gi),
-            time_ms: r.total_ms,
-            error: r.exact[2],
-            group: r.knob.clone(),
-        })
-        .collect();
-    let png = a.out.join(format!("pareto-{scene}.png"));
-    let note = plot::pareto_plot(
-        &png,
-        &format!("{scene}: total error vs time ({clock})"),
-        "time per frame (ms)",
-        "relative L2 error vs exact reference",
-        &points,
-        ex,
-    )?;
-    if let Some(n) = note {
-        eprintln!("{}: {n}", png.display());
-    }
-    Ok(())
 }
