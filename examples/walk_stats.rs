@@ -24,6 +24,7 @@ use std::path::Path;
 use hfgi::reference::direct::{scan_level, Scan};
 use hfgi::reference::indirect::{omega_min, probe_steps, receiver_normal};
 use hfgi::reference::pyramid::CpuPyramid;
+use hfgi::rules::lighting::environment_set;
 use hfgi::scene::file::load_scene;
 use hfgi::scene::model::{OmegaMin, Scene};
 
@@ -148,9 +149,9 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
 /// Rays by azimuth, 4 × 2 block and lane.
 type Rays = Vec<Vec<Vec<Ray>>>;
 
-/// Every ray of the scene's first-bounce azimuths, as `[azimuth][4 × 2 block][lane]`, and the
+/// Every ray along the azimuths `phis` (the environment's set, which the first bounce scans), as `[azimuth][4 × 2 block][lane]`, and the
 /// per-ray means of `Ray`'s counts (with `bounds`, over every fourth receiver in x and y).
-fn walk_all(scene: &Scene, bounds: bool) -> Result<(Rays, [f64; 6]), Box<dyn std::error::Error>> {
+fn walk_all(scene: &Scene, phis: &[f64], bounds: bool) -> Result<(Rays, [f64; 6]), Box<dyn std::error::Error>> {
     let gi = &scene.gi;
     let (w, h) = (scene.field.width(), scene.field.height());
     let z0 = hfgi::rules::scene::height_origin(&scene.field);
@@ -158,11 +159,9 @@ fn walk_all(scene: &Scene, bounds: bool) -> Result<(Rays, [f64; 6]), Box<dyn std
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let l0 = &pyr.levels[0];
     let gmax = l0.iter().copied().fold(f64::MIN, f64::max);
-    let m = gi.azimuths as usize;
     let (mut sum, mut rays) = ([0f64; 6], 0f64);
     let mut per = Vec::new();
-    for j in 0..m {
-        let phi = 2.0 * PI * (j as f64 + gi.azimuth_offset) / m as f64;
+    for &phi in phis {
         let d = [phi.cos(), phi.sin()];
         let plane = Ahead::new(l0, w, h, d, None);
         let mut blocks = Vec::new();
@@ -290,7 +289,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let bounds = args.iter().any(|a| a == "--bounds");
     let sets: Vec<String> = args[2..].iter().filter(|a| a.contains('=')).cloned().collect();
     let scene = load_scene(Path::new(path), &sets)?;
-    let (per, [all, g, hp, c, o, mem]) = walk_all(&scene, bounds)?;
+    let phis = environment_set(&scene.gi, scene.gi.azimuths).phi;
+    let (per, [all, g, hp, c, o, mem]) = walk_all(&scene, &phis, bounds)?;
     let mut out = std::io::stdout().lock();
     let (w, h) = (scene.field.width(), scene.field.height());
     writeln!(out, "{path} ({w}×{h}, {} azimuths): positions (probes and samples) read per ray:", per.len())?;
@@ -300,8 +300,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     writeln!(out, "  up to the last member (oracle) {o:.1}; members of the probed walk per ray {mem:.2}")?;
     report_lanes(&mut out, &per)?;
-    let m = per.len();
-    let phis: Vec<f64> = (0..m).map(|j| 2.0 * PI * (j as f64 + scene.gi.azimuth_offset) / m as f64).collect();
     report_aligned(&mut out, &per, w, h, &phis)?;
     Ok(())
 }

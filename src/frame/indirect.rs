@@ -31,7 +31,6 @@ use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, Recorder};
 
 mod scan;
 mod setup;
-use super::{radiance, shade, shared};
 use crate::rules::scene::replays;
 pub(crate) use scan::check_subgroup_vote;
 use scan::{scan_chunks, scan_kinds, scan_pipelines, scan_push, ScanKind};

@@ -39,7 +39,7 @@ impl ScanData {
         for m in if own_later { vec![first, later] } else { vec![first] } {
             let set = crate::rules::lighting::environment_set(gi, m);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
-            fold.extend(super::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
+            fold.extend(crate::frame::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
         }
         let sets = [(0, first), if own_later { (first, later) } else { (0, first) }];
         Self { samples, fold, ladder: scan_steps(gi, n_v), sets }
@@ -96,9 +96,9 @@ pub(crate) fn buffer_sizes(
 
 /// The shading shader in indirect mode (`indirect.shade`).
 fn shade_pipeline(ctx: &Context, scene: &Scene, next_stride: u32) -> Result<ComputePipeline> {
-    let spec = super::shade::spec(scene, Some(next_stride));
+    let spec = crate::frame::shade::spec(scene, Some(next_stride));
     let size = std::mem::size_of::<ShadePush>() as u32;
-    ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &super::shade::BINDINGS, size, &spec, 1)
+    ComputePipeline::new(ctx, &shaders::SHADE_DIRECT_COMP, &crate::frame::shade::BINDINGS, size, &spec, 1)
 }
 
 /// The indirect shade's pipeline (pushed last to `pipes`) and its descriptor set: `U` in, the
@@ -136,9 +136,9 @@ pub(super) fn shade_set(
 
 /// Bounce `b`'s radiance pyramid over the field, its stack at the working resolution `work`
 /// holding the radiance levels the scan reads. Its levels go into `heights`' levels buffer after
-/// level 0 where the scene allows it ([`super::radiance::shares_height_levels`]) and that
+/// level 0 where the scene allows it ([`crate::frame::radiance::shares_height_levels`]) and that
 /// pyramid was created with the room for them ([`HeightPyramid::levels_room`] at least
-/// [`super::radiance::height_levels_tail`]; a `Renderer` makes it so, `HeightPyramid::new` does
+/// [`crate::frame::radiance::height_levels_tail`]; a `Renderer` makes it so, `HeightPyramid::new` does
 /// not), else into a buffer of their own.
 pub(super) fn radiance_pyramid(
     ctx: &Context,
@@ -152,7 +152,7 @@ pub(super) fn radiance_pyramid(
     let (ww, wh) = heights.work();
     let work = (ww as usize, wh as usize);
     let (owner, offset) = (heights.levels_buffer(), scratch_offset(heights.layout()));
-    let tail = super::radiance::height_levels_tail(scene)?;
+    let tail = crate::frame::radiance::height_levels_tail(scene)?;
     let room = heights.levels_room();
     let at = if tail > 0 && tail <= room && offset + tail <= owner.size && heights.mode() == PyramidMode::Stack {
         LevelsMemory::Alias { owner, offset }
@@ -171,7 +171,7 @@ pub(super) fn radiance_pyramid(
         RadianceInputs {
             shade: shade.output(),
             incident_direct: shade.incident(),
-            glossy_planes: super::shade::glossy_planes(scene),
+            glossy_planes: crate::frame::shade::glossy_planes(scene),
             field: (scene.field.width(), scene.field.height()),
         },
         at,
