@@ -352,17 +352,20 @@ fn gpu_matches_cpu_with_radial_probes_on_spikes() {
 /// The replay (docs/indirect.md §2, "Replay"): bounce 1's walk records the casting sets of the
 /// walk without probes and bounces 2 and 3 cast them without walking (their pipeline has no
 /// walk, so the recorded sets are all they can cast). On thin spikes below zero, non-square,
-/// with and without probes in bounce 1, sub-sampled and periodic: the same light as walking
-/// (`gi.replay = false`) within f32 rounding, the twin within its tolerance, and the sets' 8
-/// bytes per receiver and azimuth allocated only with the replay.
+/// with and without probes in bounce 1, sub-sampled and periodic, and with later sets of 16, 8
+/// and 4 of the 16 azimuths (every 1st, 2nd, 4th: `rules::scene::replay_stride`): the same
+/// light as walking (`gi.replay = false`) within f32 rounding, the twin within its tolerance,
+/// and the sets' 8 bytes per receiver and later azimuth allocated only with the replay.
 #[test]
 fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
     let ctx = gpu();
     let mut s = bright(spikes_below_zero());
     s.gi.bounces = 3;
-    for (probes, sub, wrap) in [(2, 1, false), (0, 1, false), (2, 2, false), (2, 1, true)] {
-        (s.gi.radial_probes, s.gi.subsample, s.wrap) = (probes, sub, wrap);
-        let what = format!("probes {probes}, subsample {sub}, wrap={wrap}");
+    let cases =
+        [(2, 1, false, 16), (0, 1, false, 16), (2, 2, false, 16), (2, 1, true, 16), (2, 1, false, 8), (0, 2, true, 4)];
+    for (probes, sub, wrap, later) in cases {
+        (s.gi.radial_probes, s.gi.subsample, s.wrap, s.gi.azimuths_later) = (probes, sub, wrap, later);
+        let what = format!("probes {probes}, subsample {sub}, wrap={wrap}, {later} later azimuths");
         let read = |ctx: &Context, r: &Renderer| (r.read_layers(ctx).unwrap(), r.memory_bytes());
         let (replayed, with) = render_with(&ctx, &s, read);
         s.gi.replay = false;
@@ -370,7 +373,7 @@ fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
         s.gi.replay = true;
         let (w, h) = (44usize.div_ceil(sub as usize), 30usize.div_ceil(sub as usize));
         // (Without the replay the pass keeps a 16-byte placeholder, as for every unused buffer.)
-        assert_eq!(with - without, (w * h * 16 * 8 - 16) as u64, "{what}: the recorded sets' bytes");
+        assert_eq!(with - without, (w * h * later as usize * 8 - 16) as u64, "{what}: the recorded sets' bytes");
         for (name, a, b) in
             [("indirect", &replayed.indirect, &walked.indirect), ("total", &replayed.total, &walked.total)]
         {
@@ -380,8 +383,9 @@ fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
         }
         compare(&ctx, &s, &format!("replay, {what}"));
     }
-    // Where it does not apply (later probes, fewer later azimuths, one bounce): no sets.
-    for (later_probes, later_m, bounces) in [(1, 16, 3), (0, 8, 3), (0, 16, 1)] {
+    // Where it does not apply (later probes, a later set that is not a subset of the first's
+    // 16 azimuths, one bounce): no sets.
+    for (later_probes, later_m, bounces) in [(1, 16, 3), (0, 12, 3), (0, 6, 3), (0, 16, 1)] {
         (s.gi.radial_probes_later, s.gi.azimuths_later, s.gi.bounces) = (later_probes, later_m, bounces);
         let with = render_with(&ctx, &s, |_, r| r.memory_bytes());
         s.gi.replay = false;
@@ -393,19 +397,24 @@ fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
 
 /// Later bounces with their own, smaller azimuth set (`gi.azimuths_later`, docs/performance.md
 /// §12), on a non-square field with heights below zero: GPU = twin for 2 and 3 bounces (the
-/// later set serves bounces 2 and 3), and the later set changes the light (the GPU differs from
-/// the twin that scans every bounce with the full set), so neither side can ignore it.
+/// later set serves bounces 2 and 3) with 4 of 16 azimuths (every 4th of the first set's, which
+/// the later bounces replay) and 6 (its own set, which they walk); and the later set changes
+/// the light (the GPU differs from the twin that scans every bounce with the full set), so
+/// neither side can ignore it.
 #[test]
 fn gpu_matches_cpu_with_fewer_azimuths_in_later_bounces() {
     let ctx = gpu();
     let f = rough_field(26, 19, 5);
     let data: Vec<f32> = f.data().iter().map(|h| h - 7.0).collect();
     let mut s = bright(HeightField::new("rough", 26, 19, data, 4096).unwrap());
-    s.gi.azimuths_later = 4;
-    for bounces in [2, 3] {
-        s.gi.bounces = bounces;
-        compare(&ctx, &s, &format!("16 azimuths, 4 in later bounces, {bounces} bounces"));
+    for later in [4, 6] {
+        s.gi.azimuths_later = later;
+        for bounces in [2, 3] {
+            s.gi.bounces = bounces;
+            compare(&ctx, &s, &format!("16 azimuths, {later} in later bounces, {bounces} bounces"));
+        }
     }
+    s.gi.azimuths_later = 4;
     s.gi.bounces = 2;
     let (g, _) = render_gpu(&ctx, &s);
     let mut full = s.clone();

@@ -346,7 +346,7 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
         "not recorded: heights unchanged since the last frame",
         "resolved knobs: quality=default sh_order=4 azimuths=32 level_step=4",
         "level0=bilinear horizon=samples",
-        "radial_probes=2 radial_probes_later=0 azimuths_later=32",
+        "radial_probes=2 radial_probes_later=0 azimuths_later=16",
         "MaxPyramid       created",
         "elevation_basis=legendre",
     ] {

@@ -320,9 +320,11 @@ fn quality_presets_resolve_every_knob_and_explicit_knobs_override_them() {
         assert!(b.azimuths > a.azimuths && b.level_step >= a.level_step && b.level_offset >= a.level_offset);
         assert!(b.near_steps > a.near_steps && b.subsample <= a.subsample && b.sh_order >= a.sh_order);
     }
-    // The later bounces' azimuths: every preset's m, capped at an explicit smaller m, or set.
+    // The later bounces' azimuths: every preset's m but `default`'s, every 2nd of its 32
+    // (docs/performance.md §32), capped at an explicit smaller m, or set.
     for g in &ladder {
-        assert_eq!(g.azimuths_later, g.azimuths, "{:?}", g.quality);
+        let want = if g.quality == Quality::Default { g.azimuths / 2 } else { g.azimuths };
+        assert_eq!(g.azimuths_later, want, "{:?}", g.quality);
     }
     assert_eq!((h.azimuths_later, h.scan_azimuths(1), h.scan_azimuths(2)), (64, 24, 24));
     let l = parse("[gi]\nazimuths_later = 8\n").unwrap().gi;

@@ -34,6 +34,11 @@ layout(constant_id = 11) const uint HFGI_PROBES = 1u;
 // bounce (no probes), which casts those members without walking (its walk is compiled out).
 layout(constant_id = 12) const uint HFGI_REPLAY = 0u;
 layout(constant_id = 13) const int HFGI_FOLD_SIZE = 1; // vec4 texels of A_j per azimuth (shared::fold_texels)
+// The later bounces' azimuths within the first bounce's set (rules::scene::replay_stride): the
+// first bounce records the casting sets of every HFGI_REPLAY_STRIDE-th of its azimuths; a later
+// bounce's sample j (of the samples from HFGI_REPLAY_BASE on, its own set) casts set j − base.
+layout(constant_id = 14) const uint HFGI_REPLAY_STRIDE = 1u;
+layout(constant_id = 15) const uint HFGI_REPLAY_BASE = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_QUEUE = 2; // members a lane may hold before the subgroup casts (docs/performance.md §18)
 
@@ -59,9 +64,10 @@ layout(binding = 11) uniform usamplerBuffer hfgi_max_texels; // pyramid.max (f32
 layout(binding = 12) uniform usamplerBuffer hfgi_rplanes_texels;
 // The height stack's planes (hfgi_pyramid.glsl; stack mode).
 layout(binding = 13) uniform usamplerBuffer hfgi_hplanes_texels;
-// The later bounces' casting sets (HFGI_REPLAY ≠ 0): per azimuth j and receiver r the two words
-// (j·receivers + r)·2 and + 1, bit k (of the 64) set when ladder sample first + k is a member of
-// the walk without probes (rules::scene::REPLAY_STEPS: ladders of at most 64 samples).
+// The later bounces' casting sets (HFGI_REPLAY ≠ 0): per azimuth i of the later bounces' set and
+// receiver r the two words (i·receivers + r)·2 and + 1, bit k (of the 64) set when ladder sample
+// first + k is a member of the walk without probes (rules::scene::REPLAY_STEPS: ladders of at
+// most 64 samples).
 layout(std430, binding = 14) buffer Members { uvec2 hfgi_members[]; };
 layout(push_constant) uniform Push { hfgi_IndirectPush pc; };
 // What the scan reads per sample or per member it reads through texel views (HFGI_TEXELS,
@@ -460,7 +466,8 @@ void main() {
             HFGI_ADD_MOMENTS(u, rad, seg)
             running = limit;
         }
-        uint slot = j * (pc.work_width * pc.work_height) + r.y * pc.work_width + r.x;
+        uint receiver = r.y * pc.work_width + r.x, receivers = pc.work_width * pc.work_height;
+        uint slot = (HFGI_REPLAY == 2u ? j - HFGI_REPLAY_BASE : j / HFGI_REPLAY_STRIDE) * receivers + receiver;
         if (HFGI_REPLAY == 2u) {
             replay_ray(scan, d, wrap, running, u, hfgi_members[slot]);
         } else {
@@ -470,7 +477,7 @@ void main() {
             } else {
                 scan_ray(scan, d, wrap, bounded, gmax, bmin, running, u);
             }
-            if (HFGI_REPLAY == 1u) hfgi_members[slot] = hfgi_plain;
+            if (HFGI_REPLAY == 1u && j % HFGI_REPLAY_STRIDE == 0u) hfgi_members[slot] = hfgi_plain;
         }
         // eq. 19–21 folded: U += A_j u_j (the stored coefficients; hfgi_fold.glsl: in the legendre
         // basis only A_j's non-zero entries, shared::gpu_fold).

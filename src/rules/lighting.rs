@@ -22,8 +22,15 @@ pub fn has_environment(scene: &Scene) -> bool {
 /// The environment's azimuth set with `m` samples as `gi` turns it (`gi.azimuth_offset`): the
 /// set of the environment's visibility (`m = gi.azimuths`) and of every indirect scan
 /// (`gi.scan_azimuths(b)`), on the GPU and in the twins alike (docs/direct.md §4).
+///
+/// Every set is turned by the same angle, `gi.azimuth_offset` wedges of the first set
+/// (`2π·offset/gi.azimuths`): a set of `m` samples is `φ_j = 2π(j + offset·m/gi.azimuths)/m`.
+/// So when `m` divides `gi.azimuths` its samples are every `(gi.azimuths/m)`-th of the first
+/// set's, and the later bounces can cast the casting sets the first bounce's walk recorded
+/// along those azimuths ([`crate::rules::scene::replays`]).
 pub fn environment_set(gi: &GiSettings, m: u32) -> AzimuthSet {
-    azimuth::environment_set(m as usize, gi.azimuth_offset, gi.interpolation)
+    let offset = gi.azimuth_offset * f64::from(m) / f64::from(gi.azimuths.max(1));
+    azimuth::environment_set(m as usize, offset, gi.interpolation)
 }
 
 /// The light sets of a scene with their azimuth samples (docs/direct.md §4).
@@ -70,4 +77,39 @@ pub fn cap_solid_angle(alpha: f64) -> f64 {
 pub fn window_solid_angle(set: &AzimuthSet) -> f64 {
     let span: f64 = set.wedges.iter().map(|w| w.width).sum();
     span * (set.hi.sin() - set.lo.sin())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::environment_set;
+
+    /// Every set is turned by the same angle (`gi.azimuth_offset` wedges of the first set), so
+    /// a later set whose count divides the first's holds every `r`-th of its samples, whatever
+    /// the offset (what the replay of fewer later azimuths needs: `rules::scene::replay_stride`);
+    /// the first set itself is `φ_j = 2π(j + offset)/m`.
+    #[test]
+    fn a_later_set_that_divides_the_first_is_a_subset_of_it() {
+        let mut gi = crate::scene::model::GiSettings::preset(crate::scene::model::Quality::Default);
+        for offset in [0.0, 0.25, 0.5, 0.9] {
+            gi.azimuth_offset = offset;
+            let first = environment_set(&gi, 32).phi;
+            for (j, p) in first.iter().enumerate() {
+                let want = 2.0 * std::f64::consts::PI * (j as f64 + offset) / 32.0;
+                assert!((p - want).abs() < 1e-12, "offset {offset}, φ_{j} = {p}, want {want}");
+            }
+            for (m, r) in [(16, 2), (8, 4), (4, 8)] {
+                let later = environment_set(&gi, m).phi;
+                assert_eq!(later.len(), m as usize);
+                for (i, p) in later.iter().enumerate() {
+                    let d = p - first[i * r];
+                    assert!(
+                        d.abs() < 1e-12,
+                        "offset {offset}, {m} azimuths: φ_{i} = {p}, first set's φ_{} = {}",
+                        i * r,
+                        first[i * r]
+                    );
+                }
+            }
+        }
+    }
 }

@@ -38,9 +38,19 @@ pub const REPLAY_BUDGET: u64 = 32 << 20;
 pub const REPLAY_STEPS: usize = 64;
 
 /// Bytes of the recorded casting sets on a `work` grid: two 32-bit words per receiver and
-/// azimuth of the first bounce.
+/// azimuth of the later bounces (`gi.scan_azimuths(2)`: the first bounce records only the
+/// azimuths they cast, every [`replay_stride`]-th of its own).
 pub fn replay_bytes(scene: &Scene, work: (usize, usize)) -> u64 {
-    work.0 as u64 * work.1 as u64 * scene.gi.azimuths as u64 * 8
+    work.0 as u64 * work.1 as u64 * scene.gi.scan_azimuths(2) as u64 * 8
+}
+
+/// Which of the first bounce's azimuths the later bounces' set holds: every `r`-th, `r =
+/// gi.azimuths / gi.scan_azimuths(2)` when that divides ([`crate::rules::lighting::environment_set`]
+/// turns every set by the same angle, so the later set is then a subset of the first); `None`
+/// when it does not, and the later bounces cannot replay.
+pub fn replay_stride(scene: &Scene) -> Option<u32> {
+    let (first, later) = (scene.gi.azimuths, scene.gi.scan_azimuths(2));
+    (later > 0 && first % later == 0).then(|| first / later)
 }
 
 /// Whether the indirect scans of bounces 2 and later cast a casting set the first bounce's scan
@@ -48,16 +58,17 @@ pub fn replay_bytes(scene: &Scene, work: (usize, usize)) -> u64 {
 /// ray depends on the heights alone, and a later bounce's — the walk without radial probes — is
 /// found by the first bounce's walk as well (the samples above that walk's own horizon), so the
 /// later bounces cast exactly the members they would walk to. With `gi.replay`, two or more
-/// bounces, none of the later ones probing (`gi.radial_probes_later = 0`), on the first one's
-/// azimuths (`gi.azimuths_later` = `gi.azimuths`), a ladder of at most [`REPLAY_STEPS`] samples
-/// (`ladder`) and the sets within [`REPLAY_BUDGET`] on the `work` grid.
+/// bounces, none of the later ones probing (`gi.radial_probes_later = 0`), on azimuths of the
+/// first one's set (`gi.azimuths_later` divides `gi.azimuths`: [`replay_stride`]), a ladder of
+/// at most [`REPLAY_STEPS`] samples (`ladder`) and the sets within [`REPLAY_BUDGET`] on the
+/// `work` grid.
 pub fn replays(scene: &Scene, work: (usize, usize), ladder: usize) -> bool {
     let gi = &scene.gi;
     gi.replay
         && needs_indirect(scene)
         && gi.bounces >= 2
         && gi.probes(2) == 0
-        && gi.scan_azimuths(2) == gi.azimuths
+        && replay_stride(scene).is_some()
         && ladder <= REPLAY_STEPS
         && replay_bytes(scene, work) <= REPLAY_BUDGET
 }
@@ -129,16 +140,18 @@ pub fn u_coefficients(scene: &Scene) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::{replay_bytes, replays, u_bands};
+    use super::{replay_bytes, replay_stride, replays, u_bands};
 
-    /// The replay's conditions (docs/indirect.md §2): the `default` preset with two bounces
-    /// replays at 128² (4 MiB of sets) and 256² (16 MiB), not at 512² (64 MiB > the budget), nor
-    /// with `gi.replay = false`, one bounce, later probes, fewer later azimuths or a ladder
-    /// longer than 64 samples (`high`'s 107 at 128²).
+    /// The replay's conditions (docs/indirect.md §2): the `default` preset with two bounces and
+    /// 32 later azimuths replays at 128² (4 MiB of sets) and 256² (16 MiB), not at 512² (64 MiB
+    /// > the budget), nor with `gi.replay = false`, one bounce, later probes, a later set that
+    /// is not a subset of the first (a count that does not divide 32) or a ladder longer than
+    /// 64 samples (`high`'s 107 at 128²). 16 or 8 later azimuths replay every 2nd or 4th of
+    /// the first set's, in half or a quarter of the memory.
     #[test]
     fn the_replay_applies_where_the_later_walks_are_recorded_and_fit() {
         let mut s = crate::scene::file::default_scene().unwrap();
-        s.gi.bounces = 2;
+        (s.gi.bounces, s.gi.azimuths, s.gi.azimuths_later) = (2, 32, 32);
         let ladder = 35; // n_v 29 + 4 near + 2 far steps at 128²
         assert!(replays(&s, (128, 128), ladder) && replays(&s, (256, 256), ladder + 4));
         assert_eq!(replay_bytes(&s, (128, 128)), 4 << 20);
@@ -153,7 +166,15 @@ mod tests {
         assert!(off(&|t| t.gi.replay = false));
         assert!(off(&|t| t.gi.bounces = 1));
         assert!(off(&|t| t.gi.radial_probes_later = 1));
-        assert!(off(&|t| t.gi.azimuths_later = 16));
+        assert!(off(&|t| t.gi.azimuths_later = 24));
+        assert!(off(&|t| t.gi.azimuths_later = 12));
+        for (later, stride) in [(32, 1), (16, 2), (8, 4), (4, 8)] {
+            let mut t = s.clone();
+            t.gi.azimuths_later = later;
+            assert!(replays(&t, (128, 128), ladder), "{later} later azimuths");
+            assert_eq!(replay_stride(&t), Some(stride), "{later} later azimuths");
+            assert_eq!(replay_bytes(&t, (128, 128)), (4 << 20) / u64::from(stride));
+        }
         assert!(!off(&|t| t.gi.radial_probes = 0), "bounce 1 without probes records its own set");
     }
 

@@ -9,7 +9,7 @@ use crate::frame::radiance::RadiancePyramid;
 use crate::frame::renderer::vector_pyramid;
 use crate::frame::shared::{azimuth_chunks, IndirectPush, INDIRECT_LOOP_BUDGET};
 use crate::math::elevation;
-use crate::rules::scene::u_coefficients;
+use crate::rules::scene::{replay_stride, u_coefficients};
 use crate::scene::model::{PyramidMode, Scene};
 use crate::shaders;
 use crate::vk::pipeline::Bind;
@@ -134,6 +134,9 @@ pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: Sc
         (11, kind.probes as u32),
         (12, kind.replay as u32),
         (13, crate::frame::shared::fold_texels(n, gi.elevation_basis)),
+        // The later set within the first (rules::scene::replay_stride) and its first sample.
+        (14, replay_stride(scene).unwrap_or(1)),
+        (15, super::setup::later_set_first(gi)),
     ];
     [&own[..], &crate::frame::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }

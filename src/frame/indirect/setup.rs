@@ -34,20 +34,31 @@ impl ScanData {
     pub(crate) fn new(scene: &Scene, n_v: usize) -> Self {
         let gi = &scene.gi;
         let (first, later) = (gi.azimuths, gi.scan_azimuths(2));
-        let own_later = later != first; // whatever gi.bounces: a host may record more bounces
+        let own_later = later_set_first(gi) > 0;
         let (mut samples, mut fold) = (Vec::new(), Vec::new());
         for m in if own_later { vec![first, later] } else { vec![first] } {
             let set = crate::rules::lighting::environment_set(gi, m);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
             fold.extend(crate::frame::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
         }
-        let sets = [(0, first), if own_later { (first, later) } else { (0, first) }];
+        let sets = [(0, first), (later_set_first(gi), later)];
         Self { samples, fold, ladder: scan_steps(gi, n_v), sets }
     }
 
     /// The radiance level of every scan sample: [`radiance_levels`] of this ladder.
     pub(crate) fn radiance_levels(&self, scene: &Scene) -> Result<Vec<u32>> {
         radiance_levels(scene, &self.ladder)
+    }
+}
+
+/// The first sample of the later bounces' set among the uploaded samples ([`ScanData`]): after
+/// the first bounce's `gi.azimuths` when they scan fewer (`gi.azimuths_later`; whatever
+/// `gi.bounces`: a host may record more bounces), else 0 (they share the first set).
+pub(crate) fn later_set_first(gi: &crate::scene::model::GiSettings) -> u32 {
+    if gi.scan_azimuths(2) != gi.azimuths {
+        gi.azimuths
+    } else {
+        0
     }
 }
 

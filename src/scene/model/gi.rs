@@ -19,7 +19,9 @@ pub struct GiSettings {
     /// (docs/performance.md §12).
     pub azimuths_later: u32,
     /// Rotation of the environment's azimuth set (its visibility and every indirect scan), in
-    /// wedges, in [0, 1): `φ_j = 2π(j + azimuth_offset)/m`. 0 is the paper's set, whose rays run
+    /// wedges of the first set, in [0, 1): `φ_j = 2π(j + azimuth_offset)/m`; a set of
+    /// `gi.azimuths_later` samples is turned by the same angle, so that it is a subset of the
+    /// first when its count divides `m` (`rules::lighting::environment_set`). 0 is the paper's set, whose rays run
     /// along the grid's axes and diagonals; `default` uses 0.5, every ray between them, which
     /// lowered its direct and indirect error on every field measured (docs/accuracy.md §7); the
     /// other presets 0 (mixed there).
@@ -113,7 +115,7 @@ impl GiSettings {
         // probes: first bounce, later)
         let (n, (m, m_later), k, o, sub, ku, ou, near, probes) = match q {
             Quality::Draft => (4, (16, 16), 2, 4, 2, 2, 2, 2, (0, 0)),
-            Quality::Default => (4, (32, 32), 4, 6, 1, 4, 4, 4, (2, 0)),
+            Quality::Default => (4, (32, 16), 4, 6, 1, 4, 4, 4, (2, 0)),
             Quality::Paper => (4, (32, 32), 4, 2, 1, 4, 2, 0, (0, 0)),
             Quality::High => (6, (64, 64), 12, 8, 1, 8, 6, 16, (4, 0)),
             Quality::Ultra => (8, (128, 128), 24, 8, 1, 16, 8, 64, (0, 0)),
