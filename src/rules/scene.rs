@@ -143,8 +143,8 @@ mod tests {
     use super::{replay_bytes, replay_stride, replays, u_bands};
 
     /// The replay's conditions (docs/indirect.md §2): the `default` preset with two bounces and
-    /// 32 later azimuths replays at 128² (4 MiB of sets) and 256² (16 MiB), not at 512² (64 MiB
-    /// > the budget), nor with `gi.replay = false`, one bounce, later probes, a later set that
+    /// 32 later azimuths replays at 128² (4 MiB of sets) and 256² (16 MiB), not at 512² (64 MiB,
+    /// over the budget), nor with `gi.replay = false`, one bounce, later probes, a later set that
     /// is not a subset of the first (a count that does not divide 32) or a ladder longer than
     /// 64 samples (`high`'s 107 at 128²). 16 or 8 later azimuths replay every 2nd or 4th of
     /// the first set's, in half or a quarter of the memory.
