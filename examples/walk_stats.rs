@@ -10,7 +10,8 @@
 //! the positions (probes and samples) on the ray, those read before the GPU's early stop — the
 //! field's largest height against the probe-less horizon —, before a tighter stop (the largest
 //! height of the half-plane ahead of the position), and up to the last member of either walk (an
-//! oracle: no conservative stop can end sooner). With `--bounds` the per-ray figures are taken
+//! oracle: no conservative stop can end sooner), and how long the 4 × 2 blocks hold their lanes
+//! with the early stop and with the oracle (docs/performance.md §32). With `--bounds` the per-ray figures are taken
 //! on every fourth receiver in x and y, with one more stop: the largest height of the cone ahead
 //! that holds every texel a later read reaches through the stack's filters (sized for `k = 4`,
 //! `o = 6`; no wrap). Then the lane occupancy — the lanes' work over the work of every lane
@@ -205,6 +206,19 @@ fn report_lanes(out: &mut impl Write, per: &[Vec<Vec<Ray>>]) -> std::io::Result<
     let work = |r: &Ray| [r.global, r.members];
     let blocks = per[0].len();
     let lanes = |b: usize| per[0][b].len();
+    // Positions per ray that the 4 × 2 blocks' lanes are held for: every lane walks as long as
+    // its block's longest ray, ended by the GPU's early stop or, were each ray's end known
+    // beforehand, at its last member (the oracle).
+    let held = |f: &dyn Fn(&Ray) -> u32| {
+        let (mut held, mut rays) = (0f64, 0f64);
+        for b in per.iter().flatten() {
+            held += b.iter().map(f).max().unwrap_or(0) as f64 * b.len() as f64;
+            rays += b.len() as f64;
+        }
+        held / rays
+    };
+    let (g, o) = (held(&|r| r.global), held(&|r| r.oracle));
+    writeln!(out, "  positions per ray the 4 × 2 blocks hold their lanes for: early stop {g:.1}, oracle {o:.1}")?;
     writeln!(out, "  lane occupancy (work done / work of lanes kept waiting):")?;
     let shipped = per.iter().flat_map(|js| js.iter().map(|b| b.iter().map(work).collect()));
     writeln!(out, "    4 × 2 blocks, one ray each (shipped): {}", occupancy(shipped))?;
