@@ -190,14 +190,22 @@ fn walk_all(scene: &Scene, phis: &[f64], bounds: bool) -> Result<(Rays, [f64; 6]
 /// Lane occupancy of SIMD groups (each a list of the lanes' work: positions, members): the
 /// work done over the work of every lane running as long as the group's longest.
 fn occupancy(groups: impl Iterator<Item = Vec<[u32; 2]>>) -> String {
-    let (mut done, mut held) = ([0f64; 2], [0f64; 2]);
+    let (done, held, _) = lane_sums(groups);
+    format!("positions {:.0}%, members {:.0}%", 100.0 * done[0] / held[0], 100.0 * done[1] / held[1])
+}
+
+/// Of SIMD groups (each a list of the lanes' two kinds of work): the work done, the work of
+/// every lane running as long as its group's longest, and the lanes.
+fn lane_sums(groups: impl Iterator<Item = Vec<[u32; 2]>>) -> ([f64; 2], [f64; 2], f64) {
+    let (mut done, mut held, mut lanes) = ([0f64; 2], [0f64; 2], 0f64);
     for g in groups {
         for k in 0..2 {
             done[k] += g.iter().map(|w| w[k]).sum::<u32>() as f64;
             held[k] += g.iter().map(|w| w[k]).max().unwrap_or(0) as f64 * g.len() as f64;
         }
+        lanes += g.len() as f64;
     }
-    format!("positions {:.0}%, members {:.0}%", 100.0 * done[0] / held[0], 100.0 * done[1] / held[1])
+    (done, held, lanes)
 }
 
 /// The lane occupancy of the shipped assignment and of three others (see the file's comment).
@@ -209,15 +217,9 @@ fn report_lanes(out: &mut impl Write, per: &[Vec<Vec<Ray>>]) -> std::io::Result<
     // Positions per ray that the 4 × 2 blocks' lanes are held for: every lane walks as long as
     // its block's longest ray, ended by the GPU's early stop or, were each ray's end known
     // beforehand, at its last member (the oracle).
-    let held = |f: &dyn Fn(&Ray) -> u32| {
-        let (mut held, mut rays) = (0f64, 0f64);
-        for b in per.iter().flatten() {
-            held += b.iter().map(f).max().unwrap_or(0) as f64 * b.len() as f64;
-            rays += b.len() as f64;
-        }
-        held / rays
-    };
-    let (g, o) = (held(&|r| r.global), held(&|r| r.oracle));
+    let stops = per.iter().flatten().map(|b| b.iter().map(|r| [r.global, r.oracle]).collect());
+    let (_, held, rays) = lane_sums(stops);
+    let (g, o) = (held[0] / rays, held[1] / rays);
     writeln!(out, "  positions per ray the 4 × 2 blocks hold their lanes for: early stop {g:.1}, oracle {o:.1}")?;
     writeln!(out, "  lane occupancy (work done / work of lanes kept waiting):")?;
     let shipped = per.iter().flat_map(|js| js.iter().map(|b| b.iter().map(work).collect()));

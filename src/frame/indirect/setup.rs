@@ -34,14 +34,14 @@ impl ScanData {
     pub(crate) fn new(scene: &Scene, n_v: usize) -> Self {
         let gi = &scene.gi;
         let (first, later) = (gi.azimuths, gi.scan_azimuths(2));
-        let own_later = later_set_first(gi) > 0;
+        let later_first = later_set_first(gi);
         let (mut samples, mut fold) = (Vec::new(), Vec::new());
-        for m in if own_later { vec![first, later] } else { vec![first] } {
+        for m in if later_first > 0 { vec![first, later] } else { vec![first] } {
             let set = crate::rules::lighting::environment_set(gi, m);
             samples.extend(set.phi.iter().map(|p| [p.cos() as f32, p.sin() as f32, 0.0, 0.0]));
             fold.extend(crate::frame::shared::gpu_fold(gi.sh_order, &set, gi)); // n² padded rows per sample
         }
-        let sets = [(0, first), (later_set_first(gi), later)];
+        let sets = [(0, first), (later_first, later)];
         Self { samples, fold, ladder: scan_steps(gi, n_v), sets }
     }
 
