@@ -94,6 +94,7 @@ fn cases(scale_max: f64) -> Vec<(&'static str, Vec<String>, Vec<String>)> {
         ("gi.radial_probes_later", s(&["0", "16"]), s(&["17"])),
         ("gi.azimuths_later", s(&["4", "256"]), s(&["3", "257"])),
         ("gi.azimuth_offset", s(&["0", "0.999"]), s(&["-0.01", "1"])),
+        ("gi.cast_merge", s(&["0", "0.2"]), s(&["-0.001", "0.21"])),
         ("gi.sweep_near", s(&["0", "64"]), s(&["65"])),
         ("gi.local_light_azimuths", s(&["2", "64"]), s(&["1", "65"])),
         ("gi.blocker_epsilon", s(&["1e-6", "0.999"]), s(&["9e-7", "1"])),

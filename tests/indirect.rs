@@ -395,6 +395,77 @@ fn later_bounces_cast_the_casting_sets_bounce_one_recorded() {
     }
 }
 
+/// The cast merge (`gi.cast_merge = δ`, docs/indirect.md §2, "Merged casts") in the twin's
+/// scan of every receiver of thin spikes below zero (44 × 30, 2 probes, 16 azimuths): with δ
+/// the members cast are a subset of those cast without it, in the same order; each rises at
+/// least δ above the one cast before it but the ray's last; the last is the same as without
+/// (the casting set still reaches its horizon); and fewer members are cast. With δ = 0 every
+/// member is cast.
+#[test]
+fn merged_casts_keep_members_at_least_delta_apart_and_the_horizon() {
+    use hfgi::reference::direct::Scan;
+    use hfgi::reference::indirect::{receiver_normal, scan_radiance};
+    use hfgi::reference::pyramid::CpuPyramid;
+    let mut s = bright(spikes_below_zero());
+    s.gi.radial_probes = 2;
+    let z0 = hfgi::rules::scene::height_origin(&s.field);
+    let pyr = CpuPyramid::build_relative(&s.field, z0, (44, 30), s.gi.level_step, false, true).unwrap();
+    let delta = 0.03;
+    let casts = |merge: f64, p: [f64; 2], phi: f64| {
+        let mut scan = Scan::new(&pyr, &s.gi, s.texel_size, false);
+        scan.merge = merge;
+        let mut cast = Vec::new();
+        let mut rad = |i: usize, q: [f64; 2], omega: f64| {
+            cast.push((i, q, omega));
+            [1.0; 3]
+        };
+        scan_radiance(&scan, 4, p, phi, receiver_normal(&s, p), true, &mut rad);
+        cast.retain(|c| c.0 != usize::MAX); // the near-field limit's cast, not a member's
+        cast
+    };
+    let (mut all, mut merged) = (0, 0);
+    for r in 0..44 * 30 {
+        let p = [(r % 44) as f64, (r / 44) as f64];
+        for j in 0..16 {
+            let phi = std::f64::consts::TAU * (j as f64 + 0.5) / 16.0;
+            let every = casts(0.0, p, phi);
+            let kept = casts(delta, p, phi);
+            assert_eq!(every, casts(f64::MIN_POSITIVE, p, phi), "{p:?} φ {phi}: δ → 0 casts every member");
+            let mut rest = every.iter();
+            assert!(kept.iter().all(|k| rest.any(|e| e == k)), "{p:?} φ {phi}: not a subset in order");
+            assert_eq!(kept.last(), every.last(), "{p:?} φ {phi}: the last member");
+            for w in kept.windows(2).take(kept.len().saturating_sub(2)) {
+                assert!(w[1].2 - w[0].2 >= delta, "{p:?} φ {phi}: {:?} then {:?}", w[0], w[1]);
+            }
+            (all, merged) = (all + every.len(), merged + kept.len());
+        }
+    }
+    eprintln!("members cast: {all} without the merge, {merged} with δ = {delta}");
+    assert!(merged < all * 9 / 10, "the merge cast {merged} of {all} members");
+}
+
+/// The cast merge on the GPU (docs/indirect.md §2, "Merged casts"): thin spikes below zero,
+/// non-square, 2 bounces (the first walking with probes, the second replaying), δ = 0.01 and
+/// 0.05: GPU = twin; and it changes the light a little (so neither side can ignore it), less
+/// than the probes do.
+#[test]
+fn gpu_matches_cpu_with_merged_casts() {
+    let ctx = gpu();
+    let mut s = bright(spikes_below_zero());
+    (s.gi.bounces, s.gi.radial_probes, s.gi.azimuths_later) = (2, 2, 8);
+    s.gi.cast_merge = 0.0;
+    let (every, _) = render_gpu(&ctx, &s);
+    let every: Vec<[f64; 3]> = every.indirect.iter().map(|v| v.map(f64::from)).collect();
+    for delta in [0.01, 0.05] {
+        s.gi.cast_merge = delta;
+        compare(&ctx, &s, &format!("spikes, cast merge {delta}"));
+        let (merged, _) = render_gpu(&ctx, &s);
+        let change = rel_l2(&merged.indirect, &every);
+        eprintln!("δ = {delta} changes the indirect light by {change:.2e} (relative L2)");
+        assert!(change > 1e-5 && change < 1e-2, "δ = {delta}: the merge changed the indirect light by {change:e}");
+    }
+}
+
 /// Later bounces with their own, smaller azimuth set (`gi.azimuths_later`, docs/performance.md
 /// §12), on a non-square field with heights below zero: GPU = twin for 2 and 3 bounces (the
 /// later set serves bounces 2 and 3) with 4 of 16 azimuths (every 4th of the first set's, which
@@ -425,26 +496,32 @@ fn gpu_matches_cpu_with_fewer_azimuths_in_later_bounces() {
     assert!(change > 5e-3, "the later bounce's azimuth set changed the indirect light by only {change:e}");
 }
 
-/// The scan's pipelines (docs/performance.md §12, §17, §18): with probes in the first bounce
-/// only, the later bounces' scan is a second pipeline with the probes' code compiled out; with
-/// probes in every bounce, or one bounce, one pipeline serves. Both stop early against the max
-/// pyramid (§18). (GPU = twin for both: the tests above.)
+/// The scan's pipelines (docs/performance.md §12, §17, §18, §33): with probes in the first
+/// bounce only, the later bounces' scan is a second pipeline with the probes' code compiled out;
+/// with probes in every bounce, or one bounce, one pipeline serves. Both stop early against the
+/// max pyramid (§18). With the cast merge (first bounce only, a constant of its pipeline) the
+/// later bounces always have their own, even with one bounce (a bounce past `gi.bounces` casts
+/// every member). (GPU = twin for all: the tests above.)
 #[test]
 fn later_bounces_without_probes_get_a_scan_pipeline_without_the_probes() {
     let ctx = gpu();
-    let pipelines = |bounces: u32, later: u32| {
+    let pipelines = |bounces: u32, later: u32, merge: f64| {
         let mut s = bright(rough_field(20, 14, 2));
         (s.gi.bounces, s.gi.radial_probes, s.gi.radial_probes_later) = (bounces, 2, later);
+        s.gi.cast_merge = merge;
         let before = ctx.pipelines_created();
         let r = Renderer::new(&ctx, &s).unwrap();
         let made = ctx.pipelines_created() - before;
         r.destroy(&ctx);
         made
     };
-    let (one, two, two_probed) = (pipelines(1, 0), pipelines(2, 0), pipelines(2, 1));
+    let (one, two, two_probed) = (pipelines(1, 0, 0.0), pipelines(2, 0, 0.0), pipelines(2, 1, 0.0));
     eprintln!("pipelines: 1 bounce {one}, 2 bounces {two}, 2 probed bounces {two_probed}");
     assert_eq!(two, one + 1, "an unprobed later bounce has its own scan pipeline");
     assert_eq!(two_probed, one, "probed bounces share the probing pipeline");
+    let merged = [pipelines(1, 0, 0.01), pipelines(2, 0, 0.01), pipelines(2, 1, 0.01)];
+    eprintln!("with the cast merge: {merged:?}");
+    assert_eq!(merged, [one + 1; 3], "the merging first bounce's pipeline serves no later bounce");
 }
 
 /// What the next bounce starts from (docs/indirect.md §1): the indirect shade leaves in level 0

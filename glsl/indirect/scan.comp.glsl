@@ -39,6 +39,10 @@ layout(constant_id = 13) const int HFGI_FOLD_SIZE = 1; // vec4 texels of A_j per
 // bounce's sample j (of the samples from HFGI_REPLAY_BASE on, its own set) casts set j − base.
 layout(constant_id = 14) const uint HFGI_REPLAY_STRIDE = 1u;
 layout(constant_id = 15) const uint HFGI_REPLAY_BASE = 0u;
+// The cast merge (gi.cast_merge = δ; docs/indirect.md §2, "Merged casts"): tan δ, 0 = off. A
+// member less than δ above the last member kept is not cast; the next member kept is cast over
+// its interval too (or, at the ray's end, the last member held).
+layout(constant_id = 16) const float HFGI_MERGE = 0.0;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_QUEUE = 2; // members a lane may hold before the subgroup casts (docs/performance.md §18)
 
@@ -230,64 +234,7 @@ bool hfgi_nothing_beyond(bool bounded, float gmax, float bmin, float running_slo
     return bounded && gmax - bmin <= running_slope * (t * texel);
 }
 
-// Members a lane has found and not yet cast, in order (docs/performance.md §18): the slope, the
-// step t and the ladder sample index of each. A lane walks on past its members while the subgroup's
-// other lanes look for theirs; the subgroup casts when one lane's queue is full, one member per
-// lane, so lanes neither wait for one another's members nor cast alone.
-struct hfgi_Queue {
-    float slope[HFGI_QUEUE];
-    float t[HFGI_QUEUE];
-    int i[HFGI_QUEUE];
-    int count;
-};
-
-hfgi_Queue queue_empty() {
-    hfgi_Queue m;
-    [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
-        m.slope[k] = 0.0;
-        m.t[k] = 1.0;
-        m.i[k] = 0;
-    }
-    m.count = 0;
-    return m;
-}
-
-// The members of the walk without probes, one bit per ladder sample (HFGI_REPLAY = 1): bits
-// 0–31 and 32–63 of sample k = i − first. Set as the walk finds them, stored at the ray's end.
-uvec2 hfgi_plain;
-
-void plain_record(int i, int first) {
-    int k = i - first;
-    uint one = 1u << uint(k & 31);
-    hfgi_plain |= k < 32 ? uvec2(one, 0u) : uvec2(0u, one);
-}
-
-// Whether a sample at step t with height difference dh rises above the horizon `slope` (eq. 15
-// multiplied out); if so the horizon becomes its slope. The one comparison of every walk: the
-// probed walk's, and the probe-less walk's whose members the replay records (so both find the
-// same members, docs/indirect.md §2).
-bool rises(inout float slope, float dh, float t, float texel) {
-    if (dh > slope * (t * texel)) {
-        slope = dh / (t * texel);
-        return true;
-    }
-    return false;
-}
-
-// A sample at step t with height difference dh: if it rises above the walk's horizon it is a
-// member, queued.
-void queue_sample(inout hfgi_Queue m, inout float walk_slope, float dh, float t, int i, float texel) {
-    if (rises(walk_slope, dh, t, texel)) {
-        [[unroll]] for (int k = 0; k < HFGI_QUEUE; ++k) {
-            if (k == m.count) {
-                m.slope[k] = walk_slope;
-                m.t[k] = t;
-                m.i[k] = i;
-            }
-        }
-        ++m.count;
-    }
-}
+#include "hfgi_queue.glsl"
 
 // Casts the oldest queued member, if any (cast_member: over [running, its ω)).
 void queue_cast(inout hfgi_Queue m, inout vec3 u[HFGI_NE], inout float running, inout float running_slope,
@@ -316,8 +263,8 @@ void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax,
     int i = scan.first;
     float t = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
     bool more = true;
-    hfgi_Queue m = queue_empty();
-    while (more || m.count > 0) {
+    hfgi_Queue m = queue_empty(running_slope);
+    while (more || m.count > 0 || queue_holds(m, walk_slope)) {
         while (more && m.count < HFGI_QUEUE) {
             vec2 q = scan.p + t * d;
             if (i >= scan.end || !hfgi_scan_inside(scan, q) ||
@@ -326,13 +273,15 @@ void scan_ray_plain(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax,
                 break;
             }
             uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
-            int count = m.count;
+            float before = walk_slope;
             queue_sample(m, walk_slope, hfgi_height_at(scan, lv, q) - hfgi_base[lv], t, i, scan.texel_size);
-            if (HFGI_REPLAY == 1u && m.count > count) plain_record(i, scan.first); // every member is one
+            // Every member is one (queued, or held by the cast merge): the horizon rose.
+            if (HFGI_REPLAY == 1u && walk_slope != before) plain_record(i, scan.first);
             ++i;
             t *= ratio;
             if (subgroupAny(m.count == HFGI_QUEUE)) break;
         }
+        if (!more) queue_end(m, walk_slope);
         queue_cast(m, u, running, running_slope, scan, d, wrap);
     }
 }
@@ -354,8 +303,8 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
     int i = scan.first, s2 = 0, np = -1; // np < 0: sample i not set up yet
     bool more = true;
     float t_next = hfgi_scan_t(scan, i, HFGI_NV), ratio = hfgi_scan_ratio(scan); // t of sample i, then i + 1 …
-    hfgi_Queue m = queue_empty();
-    while (more || m.count > 0) {
+    hfgi_Queue m = queue_empty(running_slope);
+    while (more || m.count > 0 || queue_holds(m, walk_slope)) {
         while (more && m.count < HFGI_QUEUE) {
             if (i >= scan.end) {
                 more = false;
@@ -392,6 +341,7 @@ void scan_ray(hfgi_Scan scan, vec2 d, bool wrap, bool bounded, float gmax, float
             }
             if (subgroupAny(m.count == HFGI_QUEUE)) break;
         }
+        if (!more) queue_end(m, walk_slope);
         queue_cast(m, u, running, running_slope, scan, d, wrap);
     }
 }
@@ -406,6 +356,8 @@ void replay_ray(hfgi_Scan scan, vec2 d, bool wrap, float running, inout vec3 u[H
     float ratio = hfgi_scan_ratio(scan);
     int k = 0;
     float t = hfgi_scan_t(scan, scan.first, HFGI_NV);
+    bool held = false;
+    vec3 hold = vec3(0.0); // slope, t, sample
     while (bits != uvec2(0u)) {
         int next = bits.x != 0u ? findLSB(bits.x) : 32 + findLSB(bits.y);
         if (bits.x != 0u) bits.x &= bits.x - 1u; else bits.y &= bits.y - 1u;
@@ -416,8 +368,18 @@ void replay_ray(hfgi_Scan scan, vec2 d, bool wrap, float running, inout vec3 u[H
         int i = scan.first + k;
         uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
         vec2 q = scan.p + t * d;
-        cast_member(u, running, running_slope, (hfgi_height_at(scan, lv, q) - hfgi_base[lv]) / (t * scan.texel_size),
-                    i, q, d, scan, wrap);
+        float slope = (hfgi_height_at(scan, lv, q) - hfgi_base[lv]) / (t * scan.texel_size);
+        // The cast merge: cast at once (the last member kept is the last cast), else held.
+        held = !merge_keeps(slope, running_slope);
+        if (held) {
+            hold = vec3(slope, t, float(i));
+        } else {
+            cast_member(u, running, running_slope, slope, i, q, d, scan, wrap);
+        }
+    }
+    if (held) {
+        int i = int(hold.z);
+        cast_member(u, running, running_slope, hold.x, i, scan.p + hold.y * d, d, scan, wrap);
     }
 }
 

@@ -53,6 +53,8 @@ pub struct IndirectPass {
     push: IndirectPush,
     /// Radial probes of bounce 1 and of the later bounces (`GiSettings::probes`).
     probes: [u32; 2],
+    /// Whether bounce 1 and the later bounces merge casts (`GiSettings::merge`).
+    merges: [bool; 2],
     /// Whether the later bounces cast the casting sets the first bounce's walk recorded
     /// ([`replays`]): then the pass has two pipelines, the first bounce's (walking and
     /// recording) and the later ones' (casting without a walk).
@@ -129,6 +131,7 @@ impl IndirectPass {
             chunks: scan_chunks(gi, ladder.len(), sets),
             push,
             probes: [gi.probes(1), gi.probes(2)],
+            merges: [gi.merge(1) > 0.0, gi.merge(2) > 0.0],
             replay,
             shade_push: shade.push(),
             u_coefficients: u_coefficients(scene),
@@ -234,7 +237,7 @@ impl IndirectPass {
         let (_, scan, set) = if self.replay {
             &self.scans[later as usize]
         } else {
-            let kind = ScanKind::of(probes);
+            let kind = ScanKind::of(probes, self.merges[later as usize]);
             self.scans
                 .iter()
                 .find(|s| s.0 == kind)

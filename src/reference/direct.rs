@@ -62,6 +62,10 @@ pub struct Scan<'a> {
     /// Level-0 probes between two ladder samples, of the bounce being scanned
     /// (`GiSettings::probes`; indirect scans only, `render_gi` sets it per bounce).
     pub probes: usize,
+    /// The cast merge `δ` (rad) of the bounce being scanned (`GiSettings::merge`; indirect scans
+    /// only, `render_gi` sets it per bounce; docs/indirect.md §2): a casting-set member less
+    /// than `δ` above the last member cast is not cast.
+    pub merge: f64,
 }
 
 impl<'a> Scan<'a> {
@@ -79,6 +83,7 @@ impl<'a> Scan<'a> {
             far: gi.far_steps() as usize,
             basis: gi.elevation_basis,
             probes: gi.radial_probes as usize,
+            merge: gi.cast_merge,
         }
     }
 

@@ -65,18 +65,31 @@ pub fn scan_radiance(
         }
         running = limit;
     }
-    // Casting-set member (eq. 6) of ladder position i: it is seen over [running, ω); eq. 12
+    // A casting-set member (eq. 6) of ladder position i, seen over [running, ω); eq. 12
     // telescoped.
-    let mut cast = |i: usize, q: [f64; 2], omega: f64, running: &mut f64| {
-        if omega > *running {
-            let seg = elevation::interval(scan.basis, n, *running, omega);
-            let rad = radiance(i, q, omega);
-            for (c, uc) in u.iter_mut().enumerate() {
-                for (a, b) in uc.iter_mut().zip(&seg) {
-                    *a += rad[c] * b;
-                }
+    let mut cast = |(i, q, omega): Member, running: &mut f64| {
+        let seg = elevation::interval(scan.basis, n, *running, omega);
+        let rad = radiance(i, q, omega);
+        for (c, uc) in u.iter_mut().enumerate() {
+            for (a, b) in uc.iter_mut().zip(&seg) {
+                *a += rad[c] * b;
             }
-            *running = omega;
+        }
+        *running = omega;
+    };
+    // The members: every position above the horizon so far (the last member's ω). With the
+    // cast merge (docs/indirect.md §2, "Merged casts") a member less than δ above the last one
+    // cast is held instead, and the next one cast covers its interval; the ray's last member
+    // held is cast at its end.
+    let mut held: Option<Member> = None;
+    let mut found = |m: Member, running: &mut f64| {
+        if m.2 > held.map_or(*running, |h| h.2) {
+            if m.2 - *running >= scan.merge {
+                held = None;
+                cast(m, running);
+            } else {
+                held = Some(m);
+            }
         }
     };
     let mut t_prev = 0.0;
@@ -86,13 +99,19 @@ pub fn scan_radiance(
         let t = scan.step(i);
         for tp in probe_steps(t_prev, t, scan.probes) {
             let qp = [p[0] + tp * dx, p[1] + tp * dy];
-            cast(i, qp, scan.probe(p, qp, tp), &mut running);
+            found((i, qp, scan.probe(p, qp, tp)), &mut running);
         }
         t_prev = t;
-        cast(i, q, omega, &mut running);
+        found((i, q, omega), &mut running);
+    }
+    if let Some(m) = held {
+        cast(m, &mut running);
     }
     u
 }
+
+/// A casting-set member: its ladder position, its level-0 position and its elevation `ω`.
+type Member = (usize, [f64; 2], f64);
 
 /// The radial probes between ladder steps `t_prev` and `t` (texels; docs/accuracy.md §4): when
 /// they are more than a texel apart, `n_p = clamp(⌈t − t_prev⌉ − 1, 0, probes)` level-0 samples
@@ -211,6 +230,7 @@ pub fn render_gi(scene: &Scene) -> Result<GiOutput> {
     let mut glossy_bounces = Vec::new();
     for bounce in 1..=gi.bounces {
         scan.probes = gi.probes(bounce) as usize;
+        scan.merge = gi.merge(bounce);
         let mut images: Vec<Vec<f64>> = if vector {
             (0..3).map(|c| diffuse_src.iter().map(|v| v[c]).collect()).collect()
         } else {

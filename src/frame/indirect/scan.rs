@@ -57,6 +57,8 @@ pub(super) fn scan_push(
 pub(super) struct ScanKind {
     pub probes: bool,
     pub replay: Replay,
+    /// The cast merge (`GiSettings::merge`; specialization constant 16).
+    pub merge: bool,
 }
 
 /// A scan's part in the replay (`rules::scene::replays`, docs/indirect.md §2): none (every
@@ -70,16 +72,17 @@ pub(super) enum Replay {
 }
 
 impl ScanKind {
-    /// The kind that scans a bounce with `probes` radial probes exactly and fastest, without
-    /// the replay.
-    pub fn of(probes: u32) -> Self {
-        Self { probes: probes > 0, replay: Replay::Off }
+    /// The kind that scans a bounce with `probes` radial probes and the cast merge or not
+    /// exactly and fastest, without the replay.
+    pub fn of(probes: u32, merge: bool) -> Self {
+        Self { probes: probes > 0, replay: Replay::Off, merge }
     }
 
     /// Whether a pipeline of this kind scans a bounce of kind `k` exactly: probes are a dynamic
-    /// count (probe code with 0 probes scans none); compiled-out code cannot run.
+    /// count (probe code with 0 probes scans none); compiled-out code cannot run, and the
+    /// merge's angle is a constant of the pipeline.
     pub fn serves(self, k: ScanKind) -> bool {
-        (self.probes || !k.probes) && self.replay == k.replay
+        (self.probes || !k.probes) && self.replay == k.replay && self.merge == k.merge
     }
 }
 
@@ -105,12 +108,13 @@ pub(crate) fn check_subgroup_vote(info: &crate::vk::DeviceInfo) -> Result<()> {
 /// bounces' casting sets and they cast them (their pipeline has no walk).
 pub(super) fn scan_kinds(scene: &Scene, replay: bool) -> Vec<ScanKind> {
     let gi = &scene.gi;
+    let merges = [1, 2].map(|b| gi.merge(b) > 0.0);
     if replay {
-        let first = ScanKind { replay: Replay::Record, ..ScanKind::of(gi.probes(1)) };
-        return vec![first, ScanKind { probes: false, replay: Replay::Cast }];
+        let first = ScanKind { replay: Replay::Record, ..ScanKind::of(gi.probes(1), merges[0]) };
+        return vec![first, ScanKind { probes: false, replay: Replay::Cast, merge: merges[1] }];
     }
-    let first = ScanKind::of(gi.probes(1));
-    let later = ScanKind::of(gi.probes(2));
+    let first = ScanKind::of(gi.probes(1), merges[0]);
+    let later = ScanKind::of(gi.probes(2), merges[1]);
     if later != first && (gi.bounces > 1 || !first.serves(later)) {
         vec![first, later]
     } else {
@@ -137,6 +141,8 @@ pub(super) fn scan_spec(scene: &Scene, n_v: usize, push: &IndirectPush, kind: Sc
         // The later set within the first (rules::scene::replay_stride) and its first sample.
         (14, replay_stride(scene).unwrap_or(1)),
         (15, super::setup::later_set_first(gi)),
+        // The cast merge δ of the first bounce as tan δ, an f32 constant (0: off, compiled out).
+        (16, if kind.merge { (gi.cast_merge.tan() as f32).to_bits() } else { 0 }),
     ];
     [&own[..], &crate::frame::shared::static_modes(4, push.stack_mode, push.wrap, push.flags)].concat()
 }
@@ -223,16 +229,18 @@ mod tests {
         crate::frame::memory::check_device(&scene, &info).expect("vote in compute");
     }
 
-    /// The pipelines a scene gets (docs/performance.md §12, §17, §18): `default` with 2 bounces
-    /// a probing first one and a bare second; one bounce, only the first; probes in the later
-    /// bounces only, both even with one bounce (a bounce past `gi.bounces` needs the probes'
-    /// code, which the first lacks). Every kind serves itself, and only the probing kind serves
-    /// the other.
+    /// The pipelines a scene gets (docs/performance.md §12, §17, §18, §33): `default` without
+    /// the cast merge and with 2 bounces a probing first one and a bare second; one bounce,
+    /// only the first; probes in the later bounces only, both even with one bounce (a bounce past
+    /// `gi.bounces` needs the probes' code, which the first lacks). Every kind serves itself, and
+    /// only the probing kind serves the other. The merge (bounce 1 only) is a kind of its own:
+    /// a merging first bounce and a bare later one, even with one bounce.
     #[test]
     fn scan_kinds_cover_every_bounce_with_code_it_runs() {
         let mut s = crate::scene::file::default_scene().expect("default scene");
+        s.gi.cast_merge = 0.0;
         s.gi.bounces = 2;
-        let (probing, bare) = (ScanKind::of(1), ScanKind::of(0));
+        let (probing, bare) = (ScanKind::of(1, false), ScanKind::of(0, false));
         assert_eq!(scan_kinds(&s, false), vec![probing, bare]);
         s.gi.bounces = 1;
         assert_eq!(scan_kinds(&s, false), vec![probing]);
@@ -243,13 +251,22 @@ mod tests {
         assert_eq!(scan_kinds(&s, false), vec![bare]);
         // The replay: a recording first bounce (with its probes) and a casting later one.
         s.gi.radial_probes = 2;
-        let record = ScanKind { probes: true, replay: Replay::Record };
-        let cast = ScanKind { probes: false, replay: Replay::Cast };
+        let record = ScanKind { probes: true, replay: Replay::Record, merge: false };
+        let cast = ScanKind { probes: false, replay: Replay::Cast, merge: false };
         assert_eq!(scan_kinds(&s, true), vec![record, cast]);
         assert!(!record.serves(cast) && !cast.serves(record) && !probing.serves(record));
         for a in [probing, bare] {
             assert!(a.serves(a) && probing.serves(a), "{a:?}");
         }
+        assert!(!bare.serves(probing));
+        // The cast merge: in the first bounce's kind only.
+        s.gi.cast_merge = 0.01;
+        let merging = ScanKind::of(1, true);
+        assert_eq!(scan_kinds(&s, true), vec![ScanKind { merge: true, ..record }, cast]);
+        assert_eq!(scan_kinds(&s, false), vec![merging, bare]);
+        s.gi.bounces = 1;
+        assert_eq!(scan_kinds(&s, false), vec![merging, bare]);
+        assert!(!merging.serves(bare) && !merging.serves(probing) && !probing.serves(merging));
         assert!(!bare.serves(probing));
     }
 }

@@ -253,6 +253,7 @@ impl Ctx<'_> {
             near_steps: raw.near_steps.unwrap_or(d.near_steps),
             radial_probes: raw.radial_probes.unwrap_or(d.radial_probes),
             radial_probes_later: raw.radial_probes_later.unwrap_or(d.radial_probes_later),
+            cast_merge: raw.cast_merge.unwrap_or(d.cast_merge),
             replay: raw.replay.unwrap_or(d.replay),
             azimuths_later: raw.azimuths_later.unwrap_or(d.azimuths_later),
             azimuth_offset: raw.azimuth_offset.unwrap_or(d.azimuth_offset),

@@ -99,6 +99,7 @@ pub(super) struct RawGi {
     pub(super) near_steps: Option<u32>,
     pub(super) radial_probes: Option<u32>,
     pub(super) radial_probes_later: Option<u32>,
+    pub(super) cast_merge: Option<f64>,
     pub(super) replay: Option<bool>,
     pub(super) azimuths_later: Option<u32>,
     pub(super) azimuth_offset: Option<f64>,

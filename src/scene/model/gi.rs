@@ -63,6 +63,12 @@ pub struct GiSettings {
     pub radial_probes: u32,
     /// The same for the scans of bounces 2 and later (which carry less light), 0..=16.
     pub radial_probes_later: u32,
+    /// The cast merge `δ` of the first bounce's indirect scan (radians, [0, 0.2]): a
+    /// casting-set member less than `δ` above the last member cast is not cast; the next one
+    /// cast covers its interval with its own radiance (the ray's last member held is cast at its
+    /// end). 0: every member is cast (docs/indirect.md §2, "Merged casts"; docs/performance.md
+    /// §33). The later bounces cast every member.
+    pub cast_merge: f64,
     /// Bounces 2 and later cast the casting sets the first bounce's walk recorded instead of
     /// walking their rays (the same members; `rules::scene::replays`: without later probes,
     /// within a memory budget; docs/indirect.md §2).
@@ -153,6 +159,8 @@ impl GiSettings {
             near_steps: if paper { 0 } else { near },
             radial_probes: probes.0,
             radial_probes_later: probes.1,
+            // Measured on `default` only (docs/performance.md §33).
+            cast_merge: if q == Quality::Default { 0.01 } else { 0.0 },
             replay: true,
             scan_reach: if paper { ScanReach::Side } else { ScanReach::Diagonal },
             omega_min: if paper { OmegaMin::Asin } else { OmegaMin::Tangent },
@@ -201,7 +209,7 @@ impl GiSettings {
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
              radial_probes={} radial_probes_later={} azimuths_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
              local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={} replay={} \
-             diffuse_lobe={} azimuth_offset={}",
+             diffuse_lobe={} azimuth_offset={} cast_merge={}",
             self.quality,
             self.sh_order,
             self.azimuths,
@@ -235,7 +243,8 @@ impl GiSettings {
             self.blocker_key_lights,
             self.replay,
             self.diffuse_lobe,
-            self.azimuth_offset
+            self.azimuth_offset,
+            self.cast_merge
         )
     }
 
@@ -245,6 +254,16 @@ impl GiSettings {
             self.radial_probes
         } else {
             self.radial_probes_later
+        }
+    }
+
+    /// The cast merge of bounce `bounce` (1-based): [`GiSettings::cast_merge`] in the first
+    /// bounce, 0 in the later ones (docs/indirect.md §2, "Merged casts").
+    pub fn merge(&self, bounce: u32) -> f64 {
+        if bounce <= 1 {
+            self.cast_merge
+        } else {
+            0.0
         }
     }
 
@@ -297,6 +316,10 @@ impl GiSettings {
         let a = self.azimuth_offset;
         if !(a.is_finite() && (0.0..1.0).contains(&a)) {
             return Err(Error::param("gi.azimuth_offset", a, "a number of wedges in [0, 1)"));
+        }
+        let c = self.cast_merge;
+        if !(c.is_finite() && (0.0..=0.2).contains(&c)) {
+            return Err(Error::param("gi.cast_merge", c, "an angle in [0, 0.2] radians"));
         }
         let e = self.blocker_epsilon;
         if !(e.is_finite() && (1e-6..1.0).contains(&e)) {
