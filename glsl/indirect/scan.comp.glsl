@@ -356,8 +356,6 @@ void replay_ray(hfgi_Scan scan, vec2 d, bool wrap, float running, inout vec3 u[H
     float ratio = hfgi_scan_ratio(scan);
     int k = 0;
     float t = hfgi_scan_t(scan, scan.first, HFGI_NV);
-    bool held = false;
-    vec3 hold = vec3(0.0); // slope, t, sample
     while (bits != uvec2(0u)) {
         int next = bits.x != 0u ? findLSB(bits.x) : 32 + findLSB(bits.y);
         if (bits.x != 0u) bits.x &= bits.x - 1u; else bits.y &= bits.y - 1u;
@@ -368,18 +366,8 @@ void replay_ray(hfgi_Scan scan, vec2 d, bool wrap, float running, inout vec3 u[H
         int i = scan.first + k;
         uint lv = hfgi_scan_level(i, scan.level_bias, HFGI_NV);
         vec2 q = scan.p + t * d;
-        float slope = (hfgi_height_at(scan, lv, q) - hfgi_base[lv]) / (t * scan.texel_size);
-        // The cast merge: cast at once (the last member kept is the last cast), else held.
-        held = !merge_keeps(slope, running_slope);
-        if (held) {
-            hold = vec3(slope, t, float(i));
-        } else {
-            cast_member(u, running, running_slope, slope, i, q, d, scan, wrap);
-        }
-    }
-    if (held) {
-        int i = int(hold.z);
-        cast_member(u, running, running_slope, hold.x, i, scan.p + hold.y * d, d, scan, wrap);
+        cast_member(u, running, running_slope, (hfgi_height_at(scan, lv, q) - hfgi_base[lv]) / (t * scan.texel_size),
+                    i, q, d, scan, wrap);
     }
 }
 

@@ -111,7 +111,8 @@ pub(super) fn scan_kinds(scene: &Scene, replay: bool) -> Vec<ScanKind> {
     let merges = [1, 2].map(|b| gi.merge(b) > 0.0);
     if replay {
         let first = ScanKind { replay: Replay::Record, ..ScanKind::of(gi.probes(1), merges[0]) };
-        return vec![first, ScanKind { probes: false, replay: Replay::Cast, merge: merges[1] }];
+        // The later bounces cast every member (`GiSettings::merge`): the replay has no merge.
+        return vec![first, ScanKind { probes: false, replay: Replay::Cast, merge: false }];
     }
     let first = ScanKind::of(gi.probes(1), merges[0]);
     let later = ScanKind::of(gi.probes(2), merges[1]);
