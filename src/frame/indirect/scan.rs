@@ -116,7 +116,10 @@ pub(super) fn scan_kinds(scene: &Scene, replay: bool) -> Vec<ScanKind> {
     }
     let first = ScanKind::of(gi.probes(1), merges[0]);
     let later = ScanKind::of(gi.probes(2), merges[1]);
-    if later != first && (gi.bounces > 1 || !first.serves(later)) {
+    // With one bounce, a bounce past it (recorded by a host) takes the first bounce's pipeline
+    // when its code can scan it, with the first bounce's merge: no pipeline only for that.
+    let past = ScanKind { merge: first.merge, ..later };
+    if later != first && (gi.bounces > 1 || !first.serves(past)) {
         vec![first, later]
     } else {
         vec![first]
@@ -235,7 +238,7 @@ mod tests {
     /// only the first; probes in the later bounces only, both even with one bounce (a bounce past
     /// `gi.bounces` needs the probes' code, which the first lacks). Every kind serves itself, and
     /// only the probing kind serves the other. The merge (bounce 1 only) is a kind of its own:
-    /// a merging first bounce and a bare later one, even with one bounce.
+    /// a merging first bounce and a bare later one; with one bounce the first alone.
     #[test]
     fn scan_kinds_cover_every_bounce_with_code_it_runs() {
         let mut s = crate::scene::file::default_scene().expect("default scene");
@@ -266,7 +269,7 @@ mod tests {
         assert_eq!(scan_kinds(&s, true), vec![ScanKind { merge: true, ..record }, cast]);
         assert_eq!(scan_kinds(&s, false), vec![merging, bare]);
         s.gi.bounces = 1;
-        assert_eq!(scan_kinds(&s, false), vec![merging, bare]);
+        assert_eq!(scan_kinds(&s, false), vec![merging]);
         assert!(!merging.serves(bare) && !merging.serves(probing) && !probing.serves(merging));
         assert!(!bare.serves(probing));
     }
