@@ -389,3 +389,45 @@ fn gpu_matches_cpu_at_the_highest_sh_order() {
         compare(&ctx, &s, &format!("n=8 quality={q}"));
     }
 }
+
+/// The visibility scan's early stop (docs/performance.md §34): with the max pyramid (a scene with
+/// indirect light and radial probes, so the renderer makes one) each ray ends where no farther
+/// sample can exceed the largest slope so far. Without it (no indirect light, no max pyramid)
+/// every ray is scanned to its end. The visibility vectors of every light set must be the same
+/// bits: sharp fields — one-texel spikes below zero, a one-texel cliff, steep terraces on a
+/// non-square field with a large texel size — and a key light near the horizon.
+#[test]
+fn visibility_early_stop_keeps_every_horizon() {
+    use hfgi::scene::generators::Generator;
+    let ctx = gpu();
+    let gen = |name: &str, w: usize, h: usize| Generator::default_for(name).unwrap().generate(w, h).unwrap();
+    let mut spikes = gen("spikes", 48, 40);
+    let below: Vec<f32> = spikes.data().iter().map(|z| z * 40.0 - 25.0).collect();
+    spikes = HeightField::new("spikes below zero", 48, 40, below, 4096).unwrap();
+    let fields = [
+        ("spikes 48×40 below zero", spikes, 1.0),
+        ("cliff 64×48", gen("cliff", 64, 48), 1.0),
+        ("terraces 56×36, texel 8", gen("terraces", 56, 36), 8.0),
+    ];
+    for (what, field, texel) in fields {
+        let mut s = scene(field);
+        s.texel_size = texel;
+        s.key_lights = vec![key_light(8.0, 150.0, 3.0, 6.0), key_light(40.0, 300.0, 10.0, 1.0)];
+        let read = |s: &Scene| {
+            common::render_with(&ctx, s, |ctx, r| {
+                let bounded = r.indirect.as_ref().is_some_and(|i| i.max.is_some());
+                (bounded, (0..r.visibility.set_count()).map(|i| r.visibility.read(ctx, i).unwrap()).collect::<Vec<_>>())
+            })
+        };
+        s.gi.bounces = 1;
+        let (bounded, stopped) = read(&s);
+        s.gi.bounces = 0;
+        let (unbounded, full) = read(&s);
+        assert!(bounded && !unbounded, "{what}: the max pyramid with 1 bounce only ({bounded}, {unbounded})");
+        assert_eq!(stopped.len(), 3, "{what}: the environment and two key lights");
+        for (k, (a, b)) in stopped.iter().zip(&full).enumerate() {
+            let differ = a.iter().zip(b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+            assert!(a.len() == b.len() && differ == 0, "{what}: set {k}: {differ} of {} values differ", a.len());
+        }
+    }
+}

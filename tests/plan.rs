@@ -334,7 +334,7 @@ fn hfgi_plan_prints_stages_and_reasons_without_a_vulkan_device() {
         "frame 0 (heights changed): 11 stages",
         "1. pyramid.decimate         first frame: heights uploaded",
         "2. pyramid.synthesize       stack mode",
-        "3. pyramid.max              the indirect scan stops each ray where nothing farther can rise",
+        "3. pyramid.max              the visibility and indirect scans stop each ray where nothing farther",
         "4. visibility.environment   environment light is non-zero",
         "5. visibility.key_lights    1 key light",
         "6. shade.direct             heights changed",

@@ -8,19 +8,24 @@ use hfgi::frame::pyramid::{HeightPyramid, PyramidLayout, PyramidMode};
 use hfgi::reference::pyramid::CpuPyramid;
 use hfgi::vk::{Recorder, StageTimer};
 
-fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMode, wrap: bool, sub: usize) {
-    let work = (w.div_ceil(sub).max(2), h.div_ceil(sub).max(2));
-    let field = rough_field(w, h, (w * 31 + h + k_v as usize) as u32);
-    let (lo, hi) = field.range();
-    let tol = 1e-4 * (hi - lo) as f64;
-    let pyr = HeightPyramid::new(ctx, w, h, work, k_v, mode, wrap).unwrap();
-    pyr.upload(ctx, &field).unwrap();
+/// Uploads `field` into `pyr` and records its decimation and synthesis (one submit, waited).
+fn build(ctx: &hfgi::vk::Context, pyr: &HeightPyramid, field: &hfgi::scene::HeightField) {
+    pyr.upload(ctx, field).unwrap();
     ctx.submit_and_wait(|cmd| {
         let mut rec = Recorder::new(ctx, cmd, None);
         pyr.record(&mut rec);
         Ok(())
     })
     .unwrap();
+}
+
+fn check(ctx: &hfgi::vk::Context, w: usize, h: usize, k_v: u32, mode: PyramidMode, wrap: bool, sub: usize) {
+    let work = (w.div_ceil(sub).max(2), h.div_ceil(sub).max(2));
+    let field = rough_field(w, h, (w * 31 + h + k_v as usize) as u32);
+    let (lo, hi) = field.range();
+    let tol = 1e-4 * (hi - lo) as f64;
+    let pyr = HeightPyramid::new(ctx, w, h, work, k_v, mode, wrap).unwrap();
+    build(ctx, &pyr, &field);
     let cpu = CpuPyramid::build(&field, work, k_v, wrap, mode == PyramidMode::Stack).unwrap();
     let what = format!("{w}×{h} k_v={k_v} {mode} wrap={wrap} work={work:?}");
     assert_eq!(pyr.layout(), &cpu.layout, "{what}: layouts differ");
@@ -183,4 +188,46 @@ fn max_pyramid_equals_its_twin_exactly() {
     assert!(r.indirect.as_ref().is_some_and(|i| i.max.is_none()), "no max pyramid with wrap");
     assert!(!r.plan_next().names().contains(&"pyramid.max"));
     r.destroy(&ctx);
+}
+
+/// An f16 stack (the radiance stack's storage, one channel of heights here) against the f64
+/// twin's planes, within a half's rounding. With even plane widths every word's two B-splines
+/// share their fetches (glsl/pyramid/synthesize.comp.glsl, HFGI_PAIRS; docs/performance.md §34;
+/// the levels between two plane sizes put the second window one level texel further on some
+/// words and not on others); with odd widths, or planes coarser than their levels (sub-sampled),
+/// each value is computed alone. Every plane is checked, padding excluded.
+#[test]
+fn f16_stack_matches_cpu_paired_and_alone() {
+    use hfgi::frame::pyramid::{LevelsMemory, PyramidKind};
+    use hfgi::scene::model::Storage;
+    let gpu = gpu();
+    let ctx: &hfgi::vk::Context = &gpu;
+    let kind = PyramidKind { stack_storage: Storage::F16, ..PyramidKind::HEIGHTS };
+    for (w, h, sub, what) in
+        [(64usize, 40usize, 1usize, "paired"), (50, 36, 1, "planes of 25: alone"), (64, 40, 2, "sub-sampled: alone")]
+    {
+        let work = (w.div_ceil(sub), h.div_ceil(sub));
+        let field = rough_field(w, h, (w * 7 + h) as u32);
+        let (lo, hi) = field.range();
+        let own = LevelsMemory::Own { tail: 0 };
+        let pyr = HeightPyramid::with_kind(ctx, w, h, work, 4, PyramidMode::Stack, false, kind, None, own).unwrap();
+        assert_eq!(pyr.synthesizes_pairs(), what == "paired", "{w}×{h} work {work:?} ({what})");
+        build(ctx, &pyr, &field);
+        let cpu = CpuPyramid::build(&field, work, 4, false, true).unwrap();
+        let stack = cpu.stack.as_ref().unwrap();
+        let got = pyr.read_stack_all(ctx).unwrap().unwrap();
+        let planes = pyr.layout().stack_planes(work, pyr.stack_levels());
+        let mut worst = 0.0f64;
+        for (i, p) in planes[..pyr.stack_levels()].iter().enumerate() {
+            let (offset, count) = (p[2] as usize, (p[0] * p[1]) as usize);
+            for (k, (g, c)) in got[offset..offset + count].iter().zip(&stack[i]).enumerate() {
+                // A half's rounding (2⁻¹¹ relative) plus the f32 pipeline's 1e-4 of the range.
+                let (err, tol) = ((*g as f64 - c).abs(), c.abs() * 2f64.powi(-11) + 1e-4 * (hi - lo) as f64);
+                assert!(err <= tol, "{w}×{h} work {work:?} ({what}): plane {i} value {k}: {g} vs {c}");
+                worst = worst.max(err / tol);
+            }
+        }
+        eprintln!("{w}×{h} work {work:?} ({what}): worst error / tolerance {worst:.3}");
+        pyr.destroy(ctx);
+    }
 }

@@ -68,9 +68,13 @@ float hfgi_bilinear_at(hfgi_Level l, vec2 pos, bool wrap) {
 // i+1 + w3/g1. Integer bases and fractions are kept apart for precision. The taps are
 // combined as a bilinear blend with weight g1 (g0 = 1 − g1), in base-relative form like
 // hfgi_bilerp, so a constant region is reproduced exactly.
-float hfgi_bspline_at(hfgi_Level l, vec2 pos, bool wrap) {
-    vec2 fl = floor(pos);
-    vec2 t = pos - fl;
+// hfgi_bspline_window combines the 16 texels of the window (v_rc: row r, column c, from
+// floor(pos) − (1, 1)); a caller may fetch them itself (glsl/pyramid/synthesize.comp.glsl
+// fetches two neighbours' windows at once) and get hfgi_bspline_at's result.
+float hfgi_bspline_window(float v00, float v01, float v02, float v03, float v10, float v11, float v12, float v13,
+                          float v20, float v21, float v22, float v23, float v30, float v31, float v32, float v33,
+                          vec2 pos) {
+    vec2 t = pos - floor(pos);
     vec2 s = 1.0 - t;
     vec2 t2 = t * t;
     vec2 t3 = t2 * t;
@@ -80,14 +84,23 @@ float hfgi_bspline_at(hfgi_Level l, vec2 pos, bool wrap) {
     vec2 w2 = 1.0 - w0 - w1 - w3;
     vec2 g0 = w0 + w1;
     vec2 g1 = w2 + w3;
-    vec2 f0 = w1 / g0; // fraction from texel i-1 toward i
-    vec2 f1 = w3 / g1; // fraction from texel i+1 toward i+2
-    ivec2 i = ivec2(fl);
-    float t00 = hfgi_bilinear(l, i + ivec2(-1, -1), vec2(f0.x, f0.y), wrap);
-    float t10 = hfgi_bilinear(l, i + ivec2(1, -1), vec2(f1.x, f0.y), wrap);
-    float t01 = hfgi_bilinear(l, i + ivec2(-1, 1), vec2(f0.x, f1.y), wrap);
-    float t11 = hfgi_bilinear(l, i + ivec2(1, 1), vec2(f1.x, f1.y), wrap);
+    vec2 f0 = w1 / g0;
+    vec2 f1 = w3 / g1;
+    float t00 = hfgi_bilerp(v00, v01, v10, v11, vec2(f0.x, f0.y));
+    float t10 = hfgi_bilerp(v02, v03, v12, v13, vec2(f1.x, f0.y));
+    float t01 = hfgi_bilerp(v20, v21, v30, v31, vec2(f0.x, f1.y));
+    float t11 = hfgi_bilerp(v22, v23, v32, v33, vec2(f1.x, f1.y));
     return hfgi_bilerp(t00, t10, t01, t11, g1);
+}
+
+// The cubic B-spline of level l at pos: its window's 16 texels, combined.
+float hfgi_bspline_at(hfgi_Level l, vec2 pos, bool wrap) {
+    ivec2 i = ivec2(floor(pos));
+#define HFGI_W(c, r) hfgi_fetch(l, i + ivec2((c) - 1, (r) - 1), wrap)
+    return hfgi_bspline_window(HFGI_W(0, 0), HFGI_W(1, 0), HFGI_W(2, 0), HFGI_W(3, 0), HFGI_W(0, 1), HFGI_W(1, 1),
+                               HFGI_W(2, 1), HFGI_W(3, 1), HFGI_W(0, 2), HFGI_W(1, 2), HFGI_W(2, 2), HFGI_W(3, 2),
+                               HFGI_W(0, 3), HFGI_W(1, 3), HFGI_W(2, 3), HFGI_W(3, 3), pos);
+#undef HFGI_W
 }
 
 // Position in level l's texel units of a point given in texel units of a grid `from`

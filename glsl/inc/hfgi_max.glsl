@@ -31,4 +31,20 @@ uint hfgi_max_offset(uvec2 n0, uint level) {
     }
     return off;
 }
+// The early stop of the scans (docs/accuracy.md §4, docs/performance.md §18, §34), with
+// `bounded` (the pass reads the max pyramid), `gmax` its top and `bmin` the lowest base a
+// sample's height is compared with: no position at step t or farther has a slope above
+// (gmax − bmin)/(t·texel), so once that is ≤ `slope` (the horizon so far) nothing there can rise
+// above it and the ray ends. Conservative: the horizon (and the casting set) is the same.
+bool hfgi_nothing_beyond(bool bounded, float gmax, float bmin, float slope, float t, float texel) {
+    return bounded && gmax - bmin <= slope * (t * texel);
+}
+
+#ifdef hfgi_max
+// The field's largest level-0 height (relative to level 0's bias): the reduction's 1 × 1 top,
+// read once per receiver by a scan that defines hfgi_max(i) as its buffer's value i.
+float hfgi_max_top(uvec2 n0) {
+    return hfgi_max(hfgi_max_offset(n0, hfgi_max_count(n0) - 1u));
+}
+#endif
 #endif

@@ -135,12 +135,6 @@ void radiance_begin() {
     hfgi_rstride = HFGI_RSTACK != 0u ? hfgi_rplanes(pc.radiance_planes).z : 0u;
 }
 
-// The field's largest level-0 height (relative to level 0's bias): the max reduction's 1 × 1
-// top (hfgi_max.glsl), once per receiver, for the early stop.
-float max_begin(uvec2 n0) {
-    return hfgi_max(hfgi_max_offset(n0, hfgi_max_count(n0) - 1u));
-}
-
 // The RGB radiance of level lv at level-0 position q: the three channels' planes share their
 // texel addresses, so they are computed once and each channel reads its four corners at its own
 // plane (the same values and arithmetic as hfgi_pyramid_at per channel). Pyramid mode (no stack,
@@ -225,13 +219,6 @@ void cast_member(inout vec3 u[HFGI_NE], inout float running, inout float running
     HFGI_ADD_MOMENTS(u, rad, seg)
     running = omega;
     running_slope = slope;
-}
-
-// The early stop (with `bounded`, the field's largest height known): no position at step t or
-// farther can be a member (its slope ≤ (gmax − bmin)/(t·texel) ≤ the running slope), so the ray
-// ends there. Conservative: the members are the same (docs/accuracy.md §4).
-bool hfgi_nothing_beyond(bool bounded, float gmax, float bmin, float running_slope, float t, float texel) {
-    return bounded && gmax - bmin <= running_slope * (t * texel);
 }
 
 #include "hfgi_queue.glsl"
@@ -389,7 +376,7 @@ void main() {
         bmin = min(bmin, hfgi_base[l]);
     }
     bool bounded = (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
-    float gmax = bounded ? max(max_begin(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
+    float gmax = bounded ? max(hfgi_max_top(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     radiance_begin();
     hfgi_unexpose = 1.0 / pc.radiance_scale;
     for (int k = 0; k < HFGI_NU; ++k) hfgi_U[k] = vec3(0.0);

@@ -1,4 +1,5 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // Height pyramid, synthesis step (NS09 §9, "stack" mode): every level the stack keeps is
 // resampled with a cubic B-spline (Sigg & Hadwiger) onto its stack plane: the working grid, or
 // for a decimated stack (the radiance stack) a grid of at least twice the level's resolution
@@ -17,6 +18,10 @@
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 layout(constant_id = 0) const uint HFGI_HALF = 0u;
+// With HFGI_HALF: every plane's width is even (a word's two values lie on one row) and no plane
+// is coarser than its level (frame::pyramid::synthesizes_pairs): each word's two B-splines
+// share their fetches (hfgi_synthesized_pair; docs/performance.md §34).
+layout(constant_id = 1) const uint HFGI_PAIRS = 0u;
 // The levels (16 reads per B-spline value) and the planes through texel views (HFGI_TEXELS,
 // hfgi_filter.glsl; docs/performance.md §17).
 #define HFGI_TEXELS
@@ -40,6 +45,34 @@ float hfgi_synthesized(uint plane_index, uvec2 p, uvec2 size) {
     return hfgi_bspline_at(l, s, pc.wrap != 0u);
 }
 
+// Values t and t + 1 of a plane (texels e and e + (1, 0), one row: HFGI_PAIRS). Their B-splines'
+// windows share their rows and all but one column (the second starts o ≤ 1 level texels
+// further: the plane is no coarser than its level), so the 4 × 5 texels are fetched once, and
+// each value combines its 16 as hfgi_bspline_at does (the same values, weights and order: the
+// same result). A raw plane 0 (pc.flags & 1) holds the level's own two texels.
+vec2 hfgi_synthesized_pair(uint plane_index, uvec2 e, uvec2 size) {
+    uint kept = pc.level & 0xffffu, n_v = pc.level >> 16;
+    hfgi_Level l = hfgi_table[(plane_index / kept) * n_v + plane_index % kept];
+    bool wrap = pc.wrap != 0u;
+    vec2 s0 = hfgi_rescale(vec2(e), vec2(size), l), s1 = hfgi_rescale(vec2(e.x + 1u, e.y), vec2(size), l);
+    bool one = floor(s1.x) != floor(s0.x); // the second window starts a column further
+    ivec2 i = ivec2(floor(s0));
+    float w[4][5];
+    [[unroll]] for (int r = 0; r < 4; ++r) {
+        [[unroll]] for (int c = 0; c < 5; ++c) w[r][c] = hfgi_fetch(l, i + ivec2(c - 1, r - 1), wrap);
+    }
+    float a[4][4];
+    [[unroll]] for (int r = 0; r < 4; ++r) {
+        [[unroll]] for (int c = 0; c < 4; ++c) a[r][c] = one ? w[r][c + 1] : w[r][c];
+    }
+    vec2 v = vec2(hfgi_bspline_window(w[0][0], w[0][1], w[0][2], w[0][3], w[1][0], w[1][1], w[1][2], w[1][3],
+                                      w[2][0], w[2][1], w[2][2], w[2][3], w[3][0], w[3][1], w[3][2], w[3][3], s0),
+                  hfgi_bspline_window(a[0][0], a[0][1], a[0][2], a[0][3], a[1][0], a[1][1], a[1][2], a[1][3],
+                                      a[2][0], a[2][1], a[2][2], a[2][3], a[3][0], a[3][1], a[3][2], a[3][3], s1));
+    bool raw = (pc.flags & 1u) != 0u && plane_index % kept == 0u;
+    return raw ? vec2(hfgi_fetch(l, ivec2(e), wrap), hfgi_fetch(l, ivec2(e) + ivec2(1, 0), wrap)) : v;
+}
+
 void main() {
     uint z = gl_GlobalInvocationID.z;
     uvec2 p = gl_GlobalInvocationID.xy;
@@ -61,10 +94,15 @@ void main() {
         if (p.x >= size.x) return;
         uvec2 e = 2u * p.x < size.x ? uvec2(2u * p.x, 2u * p.y) : uvec2(2u * p.x - size.x, 2u * p.y + 1u);
         if (e.y >= size.y) return;
-        // Value t + 1: the next texel of the row, else the first of the next row, else padding.
-        uvec2 q = e.x + 1u < size.x ? uvec2(e.x + 1u, e.y) : uvec2(0u, e.y + 1u);
-        float odd = q.y < size.y ? hfgi_synthesized(z, q, size) : 0.0;
+        vec2 pair;
+        if (HFGI_PAIRS != 0u) {
+            pair = hfgi_synthesized_pair(z, e, size);
+        } else {
+            // Value t + 1: the next texel of the row, else the first of the next row, else padding.
+            uvec2 q = e.x + 1u < size.x ? uvec2(e.x + 1u, e.y) : uvec2(0u, e.y + 1u);
+            pair = vec2(hfgi_synthesized(z, e, size), q.y < size.y ? hfgi_synthesized(z, q, size) : 0.0);
+        }
         uint t = e.y * size.x + e.x;
-        hfgi_stack[(base + t) >> 1u] = hfgi_pack_pair(vec2(hfgi_synthesized(z, e, size), odd) * pc.scale, 0u, false);
+        hfgi_stack[(base + t) >> 1u] = hfgi_pack_pair(pair * pc.scale, 0u, false);
     }
 }

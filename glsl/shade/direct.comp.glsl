@@ -32,6 +32,10 @@ layout(constant_id = 6) const uint HFGI_NEXT_STRIDE = 0u; // indirect mode: floa
 // Indirect mode: coefficients of U stored (rules::scene::u_bands²); the others are read as 0.
 // Below n² only for a diffuse surface, whose clamped-cosine lobe zeroes them exactly.
 layout(constant_id = 7) const int HFGI_NU = 16;
+// The working grid is the field (no sub-sampling; frame::shade::spec): a texel is receiver r00
+// with weight 1, so its V and U are read, not interpolated from four receivers (the same value;
+// docs/performance.md §34).
+layout(constant_id = 8) const uint HFGI_SAME_GRID = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_UNROLLED = HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER; // the product matrix's unrolled sum
 
@@ -62,6 +66,10 @@ layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_store.glsl"
 
 #define vis_at(i) HFGI_LOAD_TEXEL(hfgi_vis_texels, i)
+// A receiver-grid value at this texel: `at(r)` of receiver r, bilinear over r00 … r11 with the
+// weights w00 … w11, or with HFGI_SAME_GRID receiver r00's own.
+#define HFGI_RECEIVERS_AT(at) \
+    (HFGI_SAME_GRID != 0u ? at(r00) : w00 * at(r00) + w10 * at(r10) + w01 * at(r01) + w11 * at(r11))
 
 // Texel `at` (plane · W·H + texel) of the shading planes.
 vec3 hfgi_out_get(uint at) {
@@ -182,8 +190,9 @@ void main() {
         for (int k = 0; k < HFGI_NU; ++k) {
             for (int c = 0; c < 3; ++c) {
                 uint oc = uint(3 * k + c);
-                hfgi_T[k][c] = w00 * vis_at(r00 * us + oc) + w10 * vis_at(r10 * us + oc)
-                             + w01 * vis_at(r01 * us + oc) + w11 * vis_at(r11 * us + oc);
+#define HFGI_U_OF(r) vis_at((r) * us + oc)
+                hfgi_T[k][c] = HFGI_RECEIVERS_AT(HFGI_U_OF);
+#undef HFGI_U_OF
             }
         }
         // With f16, U is stored times the pre-exposure (frame::storage::pre_exposure).
@@ -197,8 +206,9 @@ void main() {
         uint vs = hfgi_stride(HFGI_N2);
         uint base = s * receivers * vs;
         for (int k = 0; k < HFGI_N2; ++k) {
-            hfgi_V[k] = w00 * vis_at(base + r00 * vs + uint(k)) + w10 * vis_at(base + r10 * vs + uint(k))
-                      + w01 * vis_at(base + r01 * vs + uint(k)) + w11 * vis_at(base + r11 * vs + uint(k));
+#define HFGI_V_OF(r) vis_at(base + (r) * vs + uint(k))
+            hfgi_V[k] = HFGI_RECEIVERS_AT(HFGI_V_OF);
+#undef HFGI_V_OF
         }
         bool combined = HFGI_BLOCKERS >= 2u && s == 0u; // log modes: the environment's own vector
         if (combined) hfgi_interp(receivers * uint(HFGI_N2), r00, r10, r01, r11, vec4(w00, w10, w01, w11));

@@ -32,12 +32,15 @@ layout(binding = 4) uniform usamplerBuffer hfgi_fold_texels;    // A_j per azimu
 layout(std430, binding = 5) buffer Vis { uint hfgi_vis[]; };    // accumulated over azimuth chunks (hfgi_store.glsl)
 layout(binding = 6) uniform usamplerBuffer hfgi_horizons_texels; // sweep: [sample][receiver][2]
 layout(binding = 7) uniform usamplerBuffer hfgi_hplanes_texels;  // the height stack's planes (hfgi_pyramid.glsl)
+layout(binding = 8) uniform usamplerBuffer hfgi_max_texels;      // pyramid.max (f32 bits; with HFGI_FLAG_MAX_BOUND)
+#define hfgi_max(i) HFGI_TEXEL_F(hfgi_max_texels, i)
 layout(push_constant) uniform Push { hfgi_VisibilityPush pc; };
 #include "hfgi_pyramid.glsl"
 #include "hfgi_elevation.glsl"
 #include "hfgi_near.glsl"
 #include "hfgi_store.glsl"
 #include "hfgi_fold.glsl"
+#include "hfgi_max.glsl"
 
 float hfgi_omega[HFGI_NV];
 float hfgi_base[HFGI_NV];
@@ -47,8 +50,10 @@ float hfgi_base[HFGI_NV];
 // spline maximum never exceeds the largest sample and lowers near horizons); otherwise the
 // paper's maximum of the cubic B-spline through ω_i at knots and mid-points, ends extended by
 // repetition through the ladder's n_v samples, and the largest of the extra samples (near and
-// far steps, gi.near_steps and gi.scan_reach) beside it.
-float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
+// far steps, gi.near_steps and gi.scan_reach) beside it. With `bounded` (samples_max only) the
+// ray ends where no farther sample can exceed the largest slope so far (hfgi_nothing_beyond,
+// `gmax` the field's largest height, `bmin` the lowest base): the same ω_max.
+float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max, bool bounded, float gmax, float bmin) {
     // The largest slope (of every sample with samples_max, else of the extra ones): atan is
     // monotonic, so one atan of it instead of one per sample (docs/performance.md §18).
     float smax = -3.402823466e38; // atan: −π/2 (no sample)
@@ -57,6 +62,7 @@ float hfgi_horizon(hfgi_Scan scan, vec2 d, bool samples_max) {
     if (scan.first < 0 && hfgi_scan_limit_slope(scan, d, limit)) smax = limit;
     float t = hfgi_scan_t(scan, scan.first, HFGI_NV), ratio = hfgi_scan_ratio(scan);
     for (int i = scan.first; i < scan.end; ++i, t *= ratio) {
+        if (hfgi_nothing_beyond(bounded, gmax, bmin, smax, t, scan.texel_size)) break;
         vec2 q;
         float slope;
         if (!hfgi_scan_slope(scan, i, t, HFGI_NV, d, hfgi_base[hfgi_scan_level(i, scan.level_bias, HFGI_NV)], q, slope))
@@ -126,13 +132,20 @@ void main() {
                                      pc.texel_size, HFGI_STACK != 0u, HFGI_WRAP != 0u, HFGI_STATIC_FLAGS, pc.scan_extent,
                                      HFGI_NV);
     bool sweep = (HFGI_STATIC_FLAGS & HFGI_FLAG_SWEEP) != 0u;
+    float bmin = 3.402823466e38; // the lowest base a sample is compared with (the early stop)
     if (!sweep) {
         // Not unrolled: n_v inlined height reads made most of the compile time (docs/performance.md §3).
         // Only the levels the scan reads (the stack holds no others; hfgi_scan_levels).
         int levels = hfgi_scan_levels(scan, HFGI_NV);
-        [[dont_unroll]] for (int l = 0; l < levels; ++l) hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+        [[dont_unroll]] for (int l = 0; l < levels; ++l) {
+            hfgi_base[l] = hfgi_scan_base(scan, uint(l));
+            bmin = min(bmin, hfgi_base[l]);
+        }
     }
     bool samples_max = (HFGI_STATIC_FLAGS & HFGI_FLAG_HORIZON_SAMPLES) != 0u;
+    // The early stop (docs/performance.md §34): with the max pyramid, for the samples' maximum.
+    bool bounded = samples_max && !sweep && (pc.flags & HFGI_FLAG_MAX_BOUND) != 0u;
+    float gmax = bounded ? max(hfgi_max_top(uvec2(scan.n0)), bmin) : 0.0; // bmin ≤ gmax but for rounding
     uint receivers = pc.work_width * pc.work_height;
 
     float V[HFGI_N2];
@@ -153,7 +166,7 @@ void main() {
             if (pc.sweep_near > 0.0 && hfgi_near_slope(scan, smp.xy, pc.sweep_near, near))
                 wmax = max(wmax, atan(near / pc.texel_size));
         } else {
-            wmax = hfgi_horizon(scan, smp.xy, samples_max);
+            wmax = hfgi_horizon(scan, smp.xy, samples_max, bounded, gmax, bmin);
         }
         // eq. 11 within the sample's elevation window (§6), in the NLP or legendre basis.
         if (clip) wmax = max(wmax, hfgi_tangent_elevation(N, smp.xy));

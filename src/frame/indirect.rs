@@ -9,16 +9,16 @@
 //!   `glossy`, and writes the bounce's exit radiance (the next bounce's input) straight into
 //!   level 0 of the radiance pyramid (after this bounce's scan has read the pyramid).
 //!
-//! With [`uses_max_bound`] the pass also owns the max pyramid (stage `pyramid.max`,
-//! [`MaxPyramid`]; the renderer records it when the heights change), and every bounce's scan
-//! stops each ray where nothing farther can rise above its horizon (docs/accuracy.md §4,
-//! docs/performance.md §18). Barriers: compute→compute after each stage.
+//! With [`uses_max_bound`](super::pyramid_max::uses_max_bound) the pass also owns the max pyramid (stage `pyramid.max`,
+//! [`MaxPyramid`]; the renderer creates it before the visibility pass, which reads it too, and
+//! records it when the heights change), and every bounce's scan stops each ray where nothing
+//! farther can rise above its horizon (docs/accuracy.md §4, docs/performance.md §18, §34). Barriers: compute→compute after each stage.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
-use super::pyramid_max::{uses_max_bound, MaxPyramid};
+use super::pyramid_max::MaxPyramid;
 use super::radiance::RadiancePyramid;
 use super::shade::ShadePass;
 use super::shared::{IndirectPush, ShadePush, FLAG_ACCUMULATE, FLAG_MAX_BOUND};
@@ -74,13 +74,17 @@ pub struct IndirectPass {
 
 impl IndirectPass {
     /// `blockers`: the sphere blockers' visibility buffer, when the scene has spheres (each
-    /// bounce's incident radiance is multiplied by it, docs/blockers.md §4).
+    /// bounce's incident radiance is multiplied by it, docs/blockers.md §4). `max`: the max
+    /// pyramid where [`super::pyramid_max::uses_max_bound`] (the renderer creates it before the
+    /// visibility pass, which reads it too); the pass owns it and records it (`pyramid.max`),
+    /// and destroys it on failure.
     pub fn new(
         ctx: &Context,
         pyramid: &HeightPyramid,
         shade: &ShadePass,
         blockers: Option<&Buffer>,
         scene: &Scene,
+        max: Option<MaxPyramid>,
     ) -> Result<Self> {
         check_subgroup_vote(ctx.info())?;
         let gi = &scene.gi;
@@ -91,8 +95,6 @@ impl IndirectPass {
         let mut bufs: Vec<Buffer> = Vec::new();
         let mut pipes: Vec<ComputePipeline> = Vec::new();
         let mut radiance = None;
-        let mut max = None;
-        let has_max = uses_max_bound(scene);
         let replay = replays(scene, (ww as usize, wh as usize), ladder.len());
         let kinds = scan_kinds(scene, replay);
         let made = (|| -> Result<(Vec<vk::DescriptorSet>, vk::DescriptorSet, IndirectPush)> {
@@ -100,9 +102,6 @@ impl IndirectPass {
             Self::create_buffers(ctx, &mut bufs, sizes)?;
             let rad = radiance.insert(radiance_pyramid(ctx, scene, pyramid, &levels, shade)?);
             let push = Self::first_push(scene, pyramid, rad, sets[0].1);
-            if has_max {
-                max = Some(MaxPyramid::new(ctx, pyramid)?);
-            }
             Self::upload(ctx, &bufs, (&samples, &fold, &levels), replay)?;
             let binds = scan_binds(pyramid, rad, &bufs, shade.bindings()[3], max.as_ref());
             let scan_sets = scan_pipelines(ctx, scene, pyramid.layout().count(), &push, &kinds, &binds, &mut pipes)?;
@@ -197,10 +196,10 @@ impl IndirectPass {
         self.radiance.pyramid.set_stack_scale(scale);
     }
 
-    /// Records the max pyramid (if the scan uses it), then bounces `1..=bounces`: radiance
-    /// pyramid, scan, shade for each. After new heights (the max pyramid reads them).
+    /// Records bounces `1..=bounces`: radiance pyramid, scan, shade for each. After new
+    /// heights, [`IndirectPass::record_max`] comes first, before the visibility (which reads the
+    /// max pyramid too; `Renderer::record` records both in that order).
     pub fn record(&self, rec: &mut Recorder, bounces: u32) {
-        self.record_max(rec);
         for b in 1..=bounces {
             self.radiance.record(rec, b);
             self.record_scan(rec, b);
@@ -208,8 +207,8 @@ impl IndirectPass {
         }
     }
 
-    /// Records stage `pyramid.max` if the scan uses the bound (nothing otherwise); after the
-    /// heights' level 0 is written.
+    /// Records stage `pyramid.max` if the scans use the bound (nothing otherwise); after the
+    /// heights' level 0 is written and before `visibility.*` and `indirect.scan`, which read it.
     /// The live inputs' push fields (docs/integration.md §2): `f` edits the indirect shading's
     /// push constants (camera, material) as the direct pass's; `specular` is the scan's
     /// (the vector pyramid's glossy exit radiance).

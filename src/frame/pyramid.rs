@@ -44,7 +44,7 @@ mod readback;
 mod sizes;
 
 pub(crate) use sizes::{buffer_name, height_stack_levels, height_stack_of, table_entries, PyramidBuffers};
-pub(crate) use sizes::{levels_with_tail, scratch_offset};
+pub(crate) use sizes::{levels_with_tail, scratch_offset, synthesizes_pairs};
 pub use sizes::{LevelsMemory, PyramidKind};
 
 /// The levels buffer where `at` says ([`LevelsMemory`]), with its texel view (`R32_UINT`).
@@ -344,6 +344,13 @@ impl HeightPyramid {
         self.stack_levels
     }
 
+    /// Whether the synthesis computes each word of an f16 stack as two B-splines sharing their
+    /// fetches (`synthesizes_pairs`: even plane widths, no plane coarser than its level;
+    /// docs/pyramid.md). Diagnostics: the output is the same either way.
+    pub fn synthesizes_pairs(&self) -> bool {
+        self.synthesize.is_some() && synthesizes_pairs(self.kind, &self.layout, &self.plane_table)
+    }
+
     /// Bytes of GPU memory held by this mode's buffers.
     pub fn memory_bytes(&self) -> u64 {
         self.levels.owned_bytes()
@@ -452,7 +459,7 @@ impl Parts {
                 DescriptorKind::TexelBuffer,
             ],
             PUSH_SIZE,
-            &[(0, kind.stack_storage.spec())],
+            &[(0, kind.stack_storage.spec()), (1, synthesizes_pairs(kind, &sizes.layout, entries) as u32)],
             1,
         )?);
         let binds = [Bind::Texel(lv), Bind::Buffer(tb), Bind::Buffer(st), Bind::Texel(pl)];

@@ -12,6 +12,7 @@ use super::live::{self, Live, RendererOptions};
 use super::local::LocalLightPass;
 use super::plan::{FrameState, Plan, Planner, Stage};
 use super::pyramid::{HeightPyramid, LevelsMemory, PyramidKind};
+use super::pyramid_max::{uses_max_bound, MaxPyramid};
 use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
 use crate::error::{Error, Result};
@@ -81,13 +82,23 @@ impl Renderer {
         // Also the exact lobe's restrictions (check_lobe), on the scene with the options' slots.
         scene.check_limits()?;
         let mut pyramid = Self::create_pyramid(ctx, scene)?;
+        let planner = Planner::new(scene);
+        // The max pyramid (the scans' early stop), before the visibility, which reads it too;
+        // the indirect pass owns it.
+        let mut max = None;
         let r = pyramid
             .upload(ctx, &scene.field)
             .and_then(|_| pyramid.set_origin(ctx, height_origin(&scene.field)))
-            .and_then(|_| VisibilityPass::new(ctx, &pyramid, scene));
+            .and_then(|_| {
+                if planner.creates_indirect() && uses_max_bound(scene) {
+                    max = Some(MaxPyramid::new(ctx, &pyramid)?);
+                }
+                VisibilityPass::new(ctx, &pyramid, scene, max.as_ref().map(MaxPyramid::buffer))
+            });
         let visibility = match r {
             Ok(v) => v,
             Err(e) => {
+                max.into_iter().for_each(|m| m.destroy(ctx));
                 pyramid.destroy(ctx);
                 return Err(e);
             }
@@ -95,14 +106,14 @@ impl Renderer {
         let (blockers, shade) = match Self::create_direct(ctx, scene, &pyramid, &visibility) {
             Ok(d) => d,
             Err(e) => {
+                max.into_iter().for_each(|m| m.destroy(ctx));
                 visibility.destroy(ctx);
                 pyramid.destroy(ctx);
                 return Err(e);
             }
         };
-        let planner = Planner::new(scene);
         let (local, indirect) =
-            match Self::create_local_and_indirect(ctx, scene, &pyramid, &shade, blockers.as_ref(), &planner) {
+            match Self::create_local_and_indirect(ctx, scene, &pyramid, &shade, blockers.as_ref(), &planner, max) {
                 Ok(l) => l,
                 Err(e) => {
                     shade.destroy(ctx);
@@ -168,7 +179,8 @@ impl Renderer {
     }
 
     /// The local lights' pass (scenes with local lights) and the indirect passes (where the
-    /// planner creates them); on failure neither is left.
+    /// planner creates them; they take `max`); on failure neither is left, nor `max`.
+    #[allow(clippy::too_many_arguments)]
     fn create_local_and_indirect(
         ctx: &Context,
         scene: &Scene,
@@ -176,11 +188,19 @@ impl Renderer {
         shade: &ShadePass,
         blockers: Option<&BlockerPass>,
         planner: &Planner,
+        max: Option<MaxPyramid>,
     ) -> Result<(Option<LocalLightPass>, Option<IndirectPass>)> {
         let local =
-            (!scene.local_lights.is_empty()).then(|| LocalLightPass::new(ctx, pyramid, shade, scene)).transpose()?;
+            match (!scene.local_lights.is_empty()).then(|| LocalLightPass::new(ctx, pyramid, shade, scene)).transpose()
+            {
+                Ok(l) => l,
+                Err(e) => {
+                    max.into_iter().for_each(|m| m.destroy(ctx));
+                    return Err(e);
+                }
+            };
         let indirect = if planner.creates_indirect() {
-            match IndirectPass::new(ctx, pyramid, shade, blockers.map(|b| b.output()), scene) {
+            match IndirectPass::new(ctx, pyramid, shade, blockers.map(|b| b.output()), scene, max) {
                 Ok(i) => Some(i),
                 Err(e) => {
                     if let Some(l) = local {
@@ -190,6 +210,7 @@ impl Renderer {
                 }
             }
         } else {
+            max.into_iter().for_each(|m| m.destroy(ctx)); // none: made only with the indirect pass
             None
         };
         Ok((local, indirect))

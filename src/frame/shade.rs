@@ -223,7 +223,8 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
 /// `Some(floats per channel of the radiance levels buffer)`, where it writes the next bounce's
 /// input).
 /// The indirect mode reads `U`'s [`u_coefficients`](crate::rules::scene::u_coefficients).
-pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 8] {
+pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 9] {
+    let (w, h) = (scene.field.width(), scene.field.height());
     [
         (0, scene.gi.sh_order as u32),
         (1, next_stride.is_some() as u32),
@@ -233,6 +234,7 @@ pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 8] {
         (5, glossy_planes(scene) as u32),
         (6, next_stride.unwrap_or(0)),
         (7, crate::rules::scene::u_coefficients(scene) as u32),
+        (8, (scene.gi.working_size(w, h) == (w, h)) as u32),
     ]
 }
 

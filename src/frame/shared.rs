@@ -31,8 +31,9 @@ pub const FLAG_TANGENT: u32 = 4;
 
 /// `HFGI_FLAG_ACCUMULATE`: add to the output instead of overwriting it (azimuth chunks).
 pub const FLAG_ACCUMULATE: u32 = 8;
-/// `HFGI_FLAG_MAX_BOUND`: the indirect scan stops each ray where nothing farther can rise above
-/// its horizon, by the max pyramid's top (stage `pyramid.max`; docs/performance.md §18).
+/// `HFGI_FLAG_MAX_BOUND`: the indirect and visibility scans stop each ray where nothing farther
+/// can rise above its horizon, by the max pyramid's top (stage `pyramid.max`;
+/// docs/performance.md §18, §34).
 pub const FLAG_MAX_BOUND: u32 = 16;
 /// `HFGI_FLAG_SWEEP`: the visibility pass reads `ω_max` from the line sweep's horizons.
 pub const FLAG_SWEEP: u32 = 32;

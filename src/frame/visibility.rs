@@ -10,7 +10,9 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 use super::pyramid::HeightPyramid;
-use super::shared::{azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, FLAG_SWEEP, VISIBILITY_LOOP_BUDGET};
+use super::shared::{
+    azimuth_chunks, VisibilityPush, FLAG_ACCUMULATE, FLAG_MAX_BOUND, FLAG_SWEEP, VISIBILITY_LOOP_BUDGET,
+};
 use super::sweep::{SweepPass, SweepPlan};
 use crate::error::Result;
 use crate::math::azimuth::AzimuthSet;
@@ -112,15 +114,16 @@ pub struct VisibilityPass {
 /// The visibility shader's bindings (glsl/visibility/visibility.comp.glsl): texel views of what
 /// it reads per sample or azimuth (docs/performance.md §17); the level table, read per
 /// receiver, and `V`, written, are storage buffers.
-const BINDINGS: [DescriptorKind; 8] = {
-    let mut k = [DescriptorKind::TexelBuffer; 8];
+const BINDINGS: [DescriptorKind; 9] = {
+    let mut k = [DescriptorKind::TexelBuffer; 9];
     k[1] = DescriptorKind::StorageBuffer;
     k[5] = DescriptorKind::StorageBuffer;
     k
 };
 
-/// The visibility scan's push constants (`sweeps`: the sweep's horizons serve the far field).
-fn visibility_push(pyramid: &HeightPyramid, scene: &Scene, sweeps: bool) -> VisibilityPush {
+/// The visibility scan's push constants (`sweeps`: the sweep's horizons serve the far field;
+/// `bounded`: the scan reads the max pyramid and stops each ray early, docs/performance.md §34).
+fn visibility_push(pyramid: &HeightPyramid, scene: &Scene, sweeps: bool, bounded: bool) -> VisibilityPush {
     let (ww, wh) = pyramid.work();
     VisibilityPush {
         wrap: pyramid.wrap() as u32,
@@ -132,6 +135,7 @@ fn visibility_push(pyramid: &HeightPyramid, scene: &Scene, sweeps: bool) -> Visi
         stack_mode: (pyramid.mode() == PyramidMode::Stack) as u32,
         flags: super::shared::scan_flags(&scene.gi)
             | if sweeps { FLAG_SWEEP } else { 0 }
+            | if bounded && !sweeps { FLAG_MAX_BOUND } else { 0 }
             | super::shared::raw_plane_flags(pyramid.raw_plane0(), false),
         sweep_near: scene.gi.sweep_near as f32,
         scan_extent: super::shared::scan_extent(&scene.gi),
@@ -153,8 +157,10 @@ fn loop_cost(scene: &Scene, pyramid: &HeightPyramid, sweep: bool) -> u32 {
 
 impl VisibilityPass {
     /// Builds the pass for `scene` reading `pyramid`. The azimuth samples and the folded wedge
-    /// matrices `A_j` are computed here in f64 and uploaded.
-    pub fn new(ctx: &Context, pyramid: &HeightPyramid, scene: &Scene) -> Result<Self> {
+    /// matrices `A_j` are computed here in f64 and uploaded. With `max` (the max pyramid's
+    /// buffer, [`super::pyramid_max::MaxPyramid::buffer`], recorded before this pass whenever the
+    /// heights change) the scan stops each ray where no farther sample can raise its horizon.
+    pub fn new(ctx: &Context, pyramid: &HeightPyramid, scene: &Scene, max: Option<&Buffer>) -> Result<Self> {
         let n = scene.gi.sh_order;
         let n2 = n * n;
         let (ww, wh) = pyramid.work();
@@ -168,7 +174,7 @@ impl VisibilityPass {
         let mut sweep = None;
         let max_set = sets.iter().map(|s| s.count as usize).max().unwrap_or(0);
         let sweeps = scene.gi.visibility == VisibilityMethod::Sweep && max_set > 0;
-        let push = visibility_push(pyramid, scene, sweeps);
+        let push = visibility_push(pyramid, scene, sweeps, max.is_some());
         let made = (|| -> Result<vk::DescriptorSet> {
             Self::create_buffers(ctx, &mut parts, sizes, &samples, &fold)?;
             if sweeps {
@@ -188,6 +194,8 @@ impl VisibilityPass {
                     // Without the sweep, never read: any view of words.
                     Bind::Texel(sweep.as_ref().map_or(&parts[1], |s: &SweepPass| s.horizons())),
                     Bind::Texel(pyramid.height_planes()),
+                    // Without the early stop, never read: any view of words.
+                    Bind::Texel(max.unwrap_or(&parts[1])),
                 ],
             )
         })();

@@ -126,7 +126,7 @@ impl Planner {
                     name: "MaxPyramid",
                     created: self.no_max_bound.is_none(),
                     reason: match self.no_max_bound {
-                        None => "part of IndirectPass: level-0 maxima; their top stops the scan's rays early".into(),
+                        None => "part of IndirectPass: level-0 maxima; their top stops the scans' rays early".into(),
                         Some(why) => why.into(),
                     },
                 });

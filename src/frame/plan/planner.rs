@@ -107,8 +107,8 @@ impl Planner {
         if self.no_indirect().is_none() {
             match self.no_max_bound {
                 None => {
-                    let r = "the indirect scan stops each ray where nothing farther can rise above \
-                             its horizon (level-0 maxima)";
+                    let r = "the visibility and indirect scans stop each ray where nothing farther can \
+                             rise above its horizon (level-0 maxima)";
                     l.run(Stage::PyramidMax, r.into());
                 }
                 Some(why) => l.omit(Stage::PyramidMax, why.into()),

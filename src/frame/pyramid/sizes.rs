@@ -228,6 +228,18 @@ impl LevelsMemory<'_> {
     }
 }
 
+/// Whether the synthesis computes an f16 stack's words as pairs of B-splines that share their
+/// fetches (specialization constant 1 of glsl/pyramid/synthesize.comp.glsl;
+/// docs/performance.md §34): every plane of `planes` (`PyramidLayout::stack_planes`, its last
+/// entry the channel stride) has an even width, so a word's two values lie on one row, and is
+/// no narrower than its level, so their windows start at most one level texel apart. Output
+/// identical either way.
+pub(crate) fn synthesizes_pairs(kind: PyramidKind, layout: &PyramidLayout, planes: &[[u32; 4]]) -> bool {
+    let planes = &planes[..planes.len().saturating_sub(1)];
+    kind.stack_storage == Storage::F16
+        && planes.iter().zip(&layout.levels).all(|(p, l)| p[0] % 2 == 0 && l.width <= p[0])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -236,6 +248,27 @@ mod tests {
 
     /// The stack a renderer keeps is exactly the set of levels the twin's scan reads: every
     /// level below `height_stack_levels` is read by some sample, none above it is.
+    /// The paired f16 synthesis applies where every plane's width is even and no plane is
+    /// coarser than its level: the radiance stack of a power-of-two field (its 15 finest
+    /// levels, as `default` keeps at 128²), not one whose planes halve to odd widths or to a
+    /// 1 × 1 plane, not a stack finer than its sub-sampled planes, never f32.
+    #[test]
+    fn paired_synthesis_needs_even_planes_no_coarser_than_their_levels() {
+        let f16 = PyramidKind { stack_storage: Storage::F16, ..PyramidKind::HEIGHTS };
+        let pairs = |kind, (w, h): (usize, usize), work: (usize, usize), kept: Option<usize>| {
+            let layout = PyramidLayout::new(w, h, 4).unwrap();
+            let planes = layout.stack_planes(work, kept.unwrap_or(layout.count()));
+            synthesizes_pairs(kind, &layout, &planes)
+        };
+        assert!(pairs(f16, (128, 128), (128, 128), Some(15)));
+        assert!(pairs(f16, (128, 88), (128, 88), Some(15)));
+        assert!(pairs(f16, (64, 40), (64, 40), None), "down to its 2 × 1 plane");
+        assert!(!pairs(f16, (128, 128), (128, 128), None), "the 1 × 1 plane");
+        assert!(!pairs(f16, (100, 100), (100, 100), Some(15)), "planes of 25 texels");
+        assert!(!pairs(f16, (128, 128), (64, 64), Some(15)), "level 0 finer than its plane");
+        assert!(!pairs(PyramidKind::HEIGHTS, (128, 128), (128, 128), Some(15)), "f32");
+    }
+
     #[test]
     fn the_height_stack_keeps_exactly_the_levels_the_scan_reads() {
         for (size, k_v, o_v, near, reach) in [
