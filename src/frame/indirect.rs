@@ -42,7 +42,8 @@ pub const STAGE_SHADE: &str = super::stages::stage_name("indirect.shade");
 
 pub struct IndirectPass {
     pub radiance: RadiancePyramid,
-    /// The max pyramid whose top the scan's early stop reads ([`uses_max_bound`]).
+    /// The max pyramid whose top the scans' early stop reads
+    /// ([`uses_max_bound`](super::pyramid_max::uses_max_bound)).
     pub max: Option<MaxPyramid>,
     /// The scan's pipelines with their sets, by what each compiles in ([`ScanKind`]: the radial
     /// probes): one per kind the scene's bounces need.
