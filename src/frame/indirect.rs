@@ -9,10 +9,11 @@
 //!   `glossy`, and writes the bounce's exit radiance (the next bounce's input) straight into
 //!   level 0 of the radiance pyramid (after this bounce's scan has read the pyramid).
 //!
-//! With [`uses_max_bound`](super::pyramid_max::uses_max_bound) the pass also owns the max pyramid (stage `pyramid.max`,
-//! [`MaxPyramid`]; the renderer creates it before the visibility pass, which reads it too, and
-//! records it when the heights change), and every bounce's scan stops each ray where nothing
-//! farther can rise above its horizon (docs/accuracy.md §4, docs/performance.md §18, §34). Barriers: compute→compute after each stage.
+//! With [`uses_max_bound`](super::pyramid_max::uses_max_bound) the pass also owns the max
+//! pyramid (stage `pyramid.max`, [`MaxPyramid`]; the renderer creates it before the visibility
+//! pass, which reads it too, and records it when the heights change), and every bounce's scan
+//! stops each ray where nothing farther can rise above its horizon (docs/accuracy.md §4,
+//! docs/performance.md §18, §34). Barriers: compute→compute after each stage.
 
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -208,8 +209,6 @@ impl IndirectPass {
         }
     }
 
-    /// Records stage `pyramid.max` if the scans use the bound (nothing otherwise); after the
-    /// heights' level 0 is written and before `visibility.*` and `indirect.scan`, which read it.
     /// The live inputs' push fields (docs/integration.md §2): `f` edits the indirect shading's
     /// push constants (camera, material) as the direct pass's; `specular` is the scan's
     /// (the vector pyramid's glossy exit radiance).
@@ -218,6 +217,8 @@ impl IndirectPass {
         self.push.specular = [specular[0], specular[1], specular[2], 0.0];
     }
 
+    /// Records stage `pyramid.max` if the scans use the bound (nothing otherwise); after the
+    /// heights' level 0 is written and before `visibility.*` and `indirect.scan`, which read it.
     pub fn record_max(&self, rec: &mut Recorder) {
         if let Some(m) = &self.max {
             m.record(rec);
