@@ -31,6 +31,7 @@ uint hfgi_max_offset(uvec2 n0, uint level) {
     }
     return off;
 }
+
 // The early stop of the scans (docs/accuracy.md §4, docs/performance.md §18, §34), with
 // `bounded` (the pass reads the max pyramid), `gmax` its top and `bmin` the lowest base a
 // sample's height is compared with: no position at step t or farther has a slope above

@@ -34,13 +34,23 @@ layout(push_constant) uniform Push { hfgi_PyramidPush pc; };
 #include "hfgi_filter.glsl"
 #include "hfgi_store.glsl"
 
-// The value of stack plane `plane_index` (of size `size`) at texel p. With pc.flags & 1 (raw
-// plane 0, HeightPyramid::set_raw_plane0) plane 0 of each channel has level 0's size and holds
-// its own values, relative to its bias as hfgi_fetch reads them; the others the B-spline.
-float hfgi_synthesized(uint plane_index, uvec2 p, uvec2 size) {
+// The level stack plane `plane_index` resamples: channel plane_index / K, level plane_index % K.
+hfgi_Level hfgi_plane_level(uint plane_index) {
     uint kept = pc.level & 0xffffu, n_v = pc.level >> 16;
-    hfgi_Level l = hfgi_table[(plane_index / kept) * n_v + plane_index % kept];
-    if ((pc.flags & 1u) != 0u && plane_index % kept == 0u) return hfgi_fetch(l, ivec2(p), pc.wrap != 0u);
+    return hfgi_table[(plane_index / kept) * n_v + plane_index % kept];
+}
+
+// With pc.flags & 1 (raw plane 0, HeightPyramid::set_raw_plane0) plane 0 of each channel has
+// level 0's size and holds its own values, relative to its bias as hfgi_fetch reads them; the
+// others the B-spline.
+bool hfgi_raw_plane(uint plane_index) {
+    return (pc.flags & 1u) != 0u && plane_index % (pc.level & 0xffffu) == 0u;
+}
+
+// The value of stack plane `plane_index` (of size `size`) at texel p.
+float hfgi_synthesized(uint plane_index, uvec2 p, uvec2 size) {
+    hfgi_Level l = hfgi_plane_level(plane_index);
+    if (hfgi_raw_plane(plane_index)) return hfgi_fetch(l, ivec2(p), pc.wrap != 0u);
     vec2 s = hfgi_rescale(vec2(p), vec2(size), l);
     return hfgi_bspline_at(l, s, pc.wrap != 0u);
 }
@@ -51,8 +61,7 @@ float hfgi_synthesized(uint plane_index, uvec2 p, uvec2 size) {
 // each value combines its 16 as hfgi_bspline_at does (the same values, weights and order: the
 // same result). A raw plane 0 (pc.flags & 1) holds the level's own two texels.
 vec2 hfgi_synthesized_pair(uint plane_index, uvec2 e, uvec2 size) {
-    uint kept = pc.level & 0xffffu, n_v = pc.level >> 16;
-    hfgi_Level l = hfgi_table[(plane_index / kept) * n_v + plane_index % kept];
+    hfgi_Level l = hfgi_plane_level(plane_index);
     bool wrap = pc.wrap != 0u;
     vec2 s0 = hfgi_rescale(vec2(e), vec2(size), l), s1 = hfgi_rescale(vec2(e.x + 1u, e.y), vec2(size), l);
     bool one = floor(s1.x) != floor(s0.x); // the second window starts a column further
@@ -69,8 +78,7 @@ vec2 hfgi_synthesized_pair(uint plane_index, uvec2 e, uvec2 size) {
                                       w[2][0], w[2][1], w[2][2], w[2][3], w[3][0], w[3][1], w[3][2], w[3][3], s0),
                   hfgi_bspline_window(a[0][0], a[0][1], a[0][2], a[0][3], a[1][0], a[1][1], a[1][2], a[1][3],
                                       a[2][0], a[2][1], a[2][2], a[2][3], a[3][0], a[3][1], a[3][2], a[3][3], s1));
-    bool raw = (pc.flags & 1u) != 0u && plane_index % kept == 0u;
-    return raw ? vec2(hfgi_fetch(l, ivec2(e), wrap), hfgi_fetch(l, ivec2(e) + ivec2(1, 0), wrap)) : v;
+    return hfgi_raw_plane(plane_index) ? vec2(hfgi_fetch(l, ivec2(e), wrap), hfgi_fetch(l, ivec2(e) + ivec2(1, 0), wrap)) : v;
 }
 
 void main() {

@@ -33,8 +33,8 @@ layout(constant_id = 6) const uint HFGI_NEXT_STRIDE = 0u; // indirect mode: floa
 // Below n² only for a diffuse surface, whose clamped-cosine lobe zeroes them exactly.
 layout(constant_id = 7) const int HFGI_NU = 16;
 // The working grid is the field (no sub-sampling; frame::shade::spec): a texel is receiver r00
-// with weight 1, so its V and U are read, not interpolated from four receivers (the same value;
-// docs/performance.md §34).
+// with weight 1, so its V, U and blocker vectors are read, not interpolated from four receivers
+// (the same value; docs/performance.md §34).
 layout(constant_id = 8) const uint HFGI_SAME_GRID = 0u;
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_UNROLLED = HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER; // the product matrix's unrolled sum
@@ -150,12 +150,16 @@ vec3 hfgi_T2[HFGI_N2]; // log mode: the environment's L ⊛ exp*(f_hf + Σ f_i)
 float hfgi_V[HFGI_N2];
 float hfgi_VS[HFGI_N2]; // the blockers' visibility at the texel
 
-// V = the blockers' vectors at float offset `base` (n² per receiver), bilinear.
+// V = the blockers' vectors at float offset `base` (n² per receiver), at this texel
+// (HFGI_RECEIVERS_AT: bilinear, or the receiver's own on the same grid).
 void hfgi_interp(uint base, uint r00, uint r10, uint r01, uint r11, vec4 w) {
     uint n2 = uint(HFGI_N2);
+    float w00 = w.x, w10 = w.y, w01 = w.z, w11 = w.w;
     for (int k = 0; k < HFGI_N2; ++k) {
         uint o = base + uint(k);
-        hfgi_V[k] = w.x * hfgi_bv[o + r00 * n2] + w.y * hfgi_bv[o + r10 * n2] + w.z * hfgi_bv[o + r01 * n2] + w.w * hfgi_bv[o + r11 * n2];
+#define HFGI_BV_OF(r) hfgi_bv[o + (r) * n2]
+        hfgi_V[k] = HFGI_RECEIVERS_AT(HFGI_BV_OF);
+#undef HFGI_BV_OF
     }
 }
 
