@@ -10,8 +10,11 @@
 //! the positions (probes and samples) on the ray, those read before the GPU's early stop — the
 //! field's largest height against the probe-less horizon —, before a tighter stop (the largest
 //! height of the half-plane ahead of the position), and up to the last member of either walk (an
-//! oracle: no conservative stop can end sooner), and how long the 4 × 2 blocks hold their lanes
-//! with the early stop and with the oracle (docs/performance.md §32). With `--bounds` the per-ray figures are taken
+//! oracle: no conservative stop can end sooner), before the early stop against the probed walk's
+//! own horizon, and before an ideal slope-aware stop (one that knows the heights ahead, with the
+//! horizon's slope exact or rounded down to 8 tabulated slopes; docs/performance.md §35), and
+//! how long the 4 × 2 blocks hold their lanes with the early stop, the oracle and the ideal
+//! stops (docs/performance.md §32). With `--bounds` the per-ray figures are taken
 //! on every fourth receiver in x and y, with one more stop: the largest height of the cone ahead
 //! that holds every texel a later read reaches through the stack's filters (sized for `k = 4`,
 //! `o = 6`; no wrap). Then the lane occupancy — the lanes' work over the work of every lane
@@ -39,6 +42,27 @@ struct Ray {
     cone: u32,
     oracle: u32,
     members: u32,
+    own: u32,
+    plain_members: u32,
+    slope_aware: u32,
+    bucketed: u32,
+}
+
+/// The slopes an ideal slope-aware stop is tabulated at (tan of the horizon's elevation).
+const SLOPE_BUCKETS: [f64; 8] = [-1.0, -0.5, -0.25, 0.0, 0.125, 0.25, 0.5, 1.0];
+
+/// The largest of `SLOPE_BUCKETS` at or below `s` (−∞ below them all).
+fn slope_bucket(s: f64) -> f64 {
+    SLOPE_BUCKETS.iter().copied().filter(|b| *b <= s).fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// An ideal slope-aware stop (docs/performance.md §35): the first position from which no read of
+/// the rest of the ray rises above the probe-less horizon's slope before it, rounded by `round`
+/// (a table could only hold a few slopes). Ideal: it knows the heights the walk will read, with
+/// no stack filter footprint; `reads` are (t, Δh, that slope) per position.
+fn slope_aware_stop(reads: &[(f64, f64, f64)], texel: f64, round: fn(f64) -> f64) -> u32 {
+    let below = |k: usize, s: f64| reads[k..].iter().all(|(t, dh, _)| *dh <= s * t * texel);
+    (0..reads.len()).find(|&k| below(k, round(reads[k].2))).unwrap_or(reads.len()) as u32
 }
 
 /// The largest level-0 height ahead of a position along one azimuth: of the half-plane
@@ -111,6 +135,10 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
     let sp = p[0] * d[0] + p[1] * d[1];
     let mut ray = Ray::default();
     let (mut pos, mut stops) = (0u32, [None::<u32>; 3]);
+    // The early stop against the probed walk's own horizon; every read (t, Δh, the probe-less
+    // horizon's slope before it).
+    let mut own = None::<u32>;
+    let mut reads: Vec<(f64, f64, f64)> = Vec::new();
     let mut visit = |tp: f64, q: [f64; 2], level: usize, probe: bool| {
         let reach = plain * tp * texel;
         let bounds = [gmax, ahead.half_from(sp + 0.77 * tp - 1.0), ahead.cone_from(tp)];
@@ -119,7 +147,11 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
                 *stop = Some(pos);
             }
         }
+        if own.is_none() && gmax - bmin <= walk * tp * texel {
+            own = Some(pos);
+        }
         let dh = pyr.height_at(level, q[0], q[1]) - base[level];
+        reads.push((tp, dh, plain));
         pos += 1;
         if dh > walk * tp * texel {
             walk = dh / (tp * texel);
@@ -129,6 +161,7 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
         if !probe && dh > plain * tp * texel {
             plain = dh / (tp * texel);
             ray.oracle = pos;
+            ray.plain_members += 1;
         }
     };
     let mut t_prev = 0.0;
@@ -142,8 +175,12 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
         visit(t, q, level, false);
     }
     ray.all = pos;
+    ray.own = own.unwrap_or(pos);
+    let ends = |round: fn(f64) -> f64| slope_aware_stop(&reads, texel, round);
+    let (exact, bucketed) = (ends(|s| s), ends(slope_bucket));
     let [g, hp, c] = stops.map(|s| s.unwrap_or(pos));
     (ray.global, ray.half, ray.cone) = (g, hp.max(ray.oracle), c.max(ray.oracle));
+    (ray.slope_aware, ray.bucketed) = (exact.min(ray.global), bucketed.min(ray.global));
     ray
 }
 
@@ -152,7 +189,7 @@ type Rays = Vec<Vec<Vec<Ray>>>;
 
 /// Every ray along the azimuths `phis` (the environment's set, which the first bounce scans), as `[azimuth][4 × 2 block][lane]`, and the
 /// per-ray means of `Ray`'s counts (with `bounds`, over every fourth receiver in x and y).
-fn walk_all(scene: &Scene, phis: &[f64], bounds: bool) -> Result<(Rays, [f64; 6]), Box<dyn std::error::Error>> {
+fn walk_all(scene: &Scene, phis: &[f64], bounds: bool) -> Result<(Rays, [f64; 10]), Box<dyn std::error::Error>> {
     let gi = &scene.gi;
     let (w, h) = (scene.field.width(), scene.field.height());
     let z0 = hfgi::rules::scene::height_origin(&scene.field);
@@ -160,7 +197,7 @@ fn walk_all(scene: &Scene, phis: &[f64], bounds: bool) -> Result<(Rays, [f64; 6]
     let scan = Scan::new(&pyr, gi, scene.texel_size, scene.wrap);
     let l0 = &pyr.levels[0];
     let gmax = l0.iter().copied().fold(f64::MIN, f64::max);
-    let (mut sum, mut rays) = ([0f64; 6], 0f64);
+    let (mut sum, mut rays) = ([0f64; 10], 0f64);
     let mut per = Vec::new();
     for &phi in phis {
         let d = [phi.cos(), phi.sin()];
@@ -175,7 +212,18 @@ fn walk_all(scene: &Scene, phis: &[f64], bounds: bool) -> Result<(Rays, [f64; 6]
                 let ray = walk(scene, &scan, &pyr, p, phi, gmax, cone.as_ref().unwrap_or(&plane));
                 block.push(ray);
                 if !bounds || sub {
-                    let r = [ray.all, ray.global, ray.half, ray.cone, ray.oracle, ray.members];
+                    let r = [
+                        ray.all,
+                        ray.global,
+                        ray.half,
+                        ray.cone,
+                        ray.oracle,
+                        ray.members,
+                        ray.own,
+                        ray.plain_members,
+                        ray.slope_aware,
+                        ray.bucketed,
+                    ];
                     sum.iter_mut().zip(r).for_each(|(s, v)| *s += v as f64);
                     rays += 1.0;
                 }
@@ -219,8 +267,12 @@ fn report_lanes(out: &mut impl Write, per: &[Vec<Vec<Ray>>]) -> std::io::Result<
     // beforehand, at its last member (the oracle).
     let stops = per.iter().flatten().map(|b| b.iter().map(|r| [r.global, r.oracle]).collect());
     let (_, held, rays) = lane_sums(stops);
+    let ideal = per.iter().flatten().map(|b| b.iter().map(|r| [r.slope_aware, r.bucketed]).collect());
+    let (_, ideal, _) = lane_sums(ideal);
     let (g, o) = (held[0] / rays, held[1] / rays);
     writeln!(out, "  positions per ray the 4 × 2 blocks hold their lanes for: early stop {g:.1}, oracle {o:.1}")?;
+    let (sa, bu) = (ideal[0] / rays, ideal[1] / rays);
+    writeln!(out, "    … with the ideal slope-aware stop {sa:.1}, its slope in 8 buckets {bu:.1}")?;
     writeln!(out, "  lane occupancy (work done / work of lanes kept waiting):")?;
     let shipped = per.iter().flat_map(|js| js.iter().map(|b| b.iter().map(work).collect()));
     writeln!(out, "    4 × 2 blocks, one ray each (shipped): {}", occupancy(shipped))?;
@@ -306,7 +358,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sets: Vec<String> = args[2..].iter().filter(|a| a.contains('=')).cloned().collect();
     let scene = load_scene(Path::new(path), &sets)?;
     let phis = environment_set(&scene.gi, scene.gi.azimuths).phi;
-    let (per, [all, g, hp, c, o, mem]) = walk_all(&scene, &phis, bounds)?;
+    let (per, [all, g, hp, c, o, mem, own, pm, ex, bk]) = walk_all(&scene, &phis, bounds)?;
     let mut out = std::io::stdout().lock();
     let (w, h) = (scene.field.width(), scene.field.height());
     writeln!(out, "{path} ({w}×{h}, {} azimuths): positions (probes and samples) read per ray:", per.len())?;
@@ -315,6 +367,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         writeln!(out, "  the cone stop {c:.1} (every fourth receiver in x and y)")?;
     }
     writeln!(out, "  up to the last member (oracle) {o:.1}; members of the probed walk per ray {mem:.2}")?;
+    writeln!(
+        out,
+        "  the early stop at the probed walk's own horizon {own:.1}; members of the probe-less walk per ray {pm:.2}"
+    )?;
+    writeln!(out, "  an ideal slope-aware stop {ex:.1}, its slope in 8 buckets {bk:.1}")?;
     report_lanes(&mut out, &per)?;
     report_aligned(&mut out, &per, w, h, &phis)?;
     Ok(())
