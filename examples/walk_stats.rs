@@ -134,21 +134,18 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
     let (mut walk, mut plain) = (running.tan(), running.tan());
     let sp = p[0] * d[0] + p[1] * d[1];
     let mut ray = Ray::default();
-    let (mut pos, mut stops) = (0u32, [None::<u32>; 3]);
-    // The early stop against the probed walk's own horizon; every read (t, Δh, the probe-less
-    // horizon's slope before it).
-    let mut own = None::<u32>;
+    let (mut pos, mut stops) = (0u32, [None::<u32>; 4]);
+    // Every read: (t, Δh, the probe-less horizon's slope before it).
     let mut reads: Vec<(f64, f64, f64)> = Vec::new();
     let mut visit = |tp: f64, q: [f64; 2], level: usize, probe: bool| {
-        let reach = plain * tp * texel;
-        let bounds = [gmax, ahead.half_from(sp + 0.77 * tp - 1.0), ahead.cone_from(tp)];
-        for (stop, bound) in stops.iter_mut().zip(bounds) {
-            if stop.is_none() && bound - bmin <= reach {
+        // Each stop's bound and the horizon it is held to: the shipped one, the half-plane and
+        // the cone against the probe-less horizon, and the shipped one against the probed walk's.
+        let half = ahead.half_from(sp + 0.77 * tp - 1.0);
+        let checks = [(gmax, plain), (half, plain), (ahead.cone_from(tp), plain), (gmax, walk)];
+        for (stop, (bound, slope)) in stops.iter_mut().zip(checks) {
+            if stop.is_none() && bound - bmin <= slope * tp * texel {
                 *stop = Some(pos);
             }
-        }
-        if own.is_none() && gmax - bmin <= walk * tp * texel {
-            own = Some(pos);
         }
         let dh = pyr.height_at(level, q[0], q[1]) - base[level];
         reads.push((tp, dh, plain));
@@ -175,11 +172,10 @@ fn walk(scene: &Scene, scan: &Scan, pyr: &CpuPyramid, p: [f64; 2], phi: f64, gma
         visit(t, q, level, false);
     }
     ray.all = pos;
-    ray.own = own.unwrap_or(pos);
     let ends = |round: fn(f64) -> f64| slope_aware_stop(&reads, texel, round);
     let (exact, bucketed) = (ends(|s| s), ends(slope_bucket));
-    let [g, hp, c] = stops.map(|s| s.unwrap_or(pos));
-    (ray.global, ray.half, ray.cone) = (g, hp.max(ray.oracle), c.max(ray.oracle));
+    let [g, hp, c, own] = stops.map(|s| s.unwrap_or(pos));
+    (ray.global, ray.half, ray.cone, ray.own) = (g, hp.max(ray.oracle), c.max(ray.oracle), own);
     (ray.slope_aware, ray.bucketed) = (exact.min(ray.global), bucketed.min(ray.global));
     ray
 }
