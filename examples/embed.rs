@@ -248,7 +248,11 @@ fn frames(
 ) -> Result<(u64, u64, Result<(), String>), String> {
     let (submits, pipelines) = (ctx.submit_count(), ctx.pipelines_created());
     let bytes = (SIZE * SIZE * 4) as u64;
-    let shading = (SIZE * SIZE * 12) as u64; // plane 0 (the total): RGB f32 per texel
+    // Plane 0 (the total): one texel per sample in the renderer's format (an RGB f32 triple by
+    // default, one RGBE word with gi.shading_storage = "rgbe"; ShadingFormat::decode reads
+    // both).
+    let format = renderer.shading_format();
+    let shading = (SIZE * SIZE) as u64 * format.texel_bytes();
     let pool_info = vk::CommandPoolCreateInfo::default()
         .queue_family_index(h.family)
         .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
@@ -279,7 +283,7 @@ fn frames(
             h.device.reset_fences(&[slot.fence]).map_err(|e| e.to_string())?;
         }
         let m = slot.readback.alloc.mapped_slice().ok_or("unmapped")?;
-        outputs[f] = bytemuck::cast_slice(&m[..shading as usize]).to_vec();
+        outputs[f] = format.decode(&m[..shading as usize]).into_iter().flatten().collect();
         Ok(())
     };
     for f in 0..FRAMES {

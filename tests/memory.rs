@@ -188,8 +188,8 @@ fn estimate_equals_what_the_passes_allocate() {
 
 /// The bytes of `V` and `U` from first principles: receivers × n² values (V) or 3 × 9 (U of the
 /// default diffuse surface: bands 0–2) of 4 bytes (f32) or 2 bytes with each receiver padded to
-/// an even count (f16); the radiance stack
-/// halves (rounded up to a whole word), and nothing else changes.
+/// an even count (f16); the radiance stack halves (rounded up to a whole word), and nothing
+/// else changes (the shading planes have their own `gi.shading_storage`).
 #[test]
 fn f16_storage_halves_v_u_and_the_radiance_stack() {
     let bytes = |storage: &str, n: usize| {
@@ -224,22 +224,27 @@ fn f16_storage_halves_v_u_and_the_radiance_stack() {
     }
 }
 
-/// The shading buffer holds RGB `f32` triples (12 bytes per texel), six planes for a glossy
+/// The shading buffer holds an RGB `f32` triple per texel (12 bytes; `gi.shading_storage =
+/// "rgbe"`: one RGBE word, 4 bytes), six planes for a glossy
 /// surface and three (total, direct, indirect) for a diffuse one, and the renderer reports the
 /// same plane count; first principles, not the estimate's own formula.
 #[test]
 fn shading_planes_are_rgb_and_only_a_glossy_surface_has_the_glossy_ones() {
     let ctx = common::gpu();
-    for (specular, planes) in [(None, 3u64), (Some("material.specular=[0.2,0.2,0.2]"), 6)] {
-        let mut o = vec!["heightfield.size=[37,50]", "gi.bounces=1"];
+    // An f32 RGB triple per texel, or one RGBE word (docs/integration.md).
+    let cases = [(None, 3u64), (Some("material.specular=[0.2,0.2,0.2]"), 6)];
+    for ((specular, planes), (storage, texel)) in cases.into_iter().flat_map(|c| [(c, ("f32", 12)), (c, ("rgbe", 4))]) {
+        let st = format!("gi.shading_storage=\"{storage}\"");
+        let mut o = vec!["heightfield.size=[37,50]", "gi.bounces=1", st.as_str()];
         o.extend(specular);
         let scene = scene_of("", &o);
         let e = memory::renderer(&scene).unwrap();
         let bytes = e.buffers.iter().find(|(b, _)| b == "hfgi.shade.output").unwrap().1;
-        assert_eq!(bytes, planes * 37 * 50 * 12, "specular {specular:?}");
+        assert_eq!(bytes, planes * 37 * 50 * texel, "specular {specular:?}, {storage}");
         let r = Renderer::new(&ctx, &scene).unwrap();
         assert_eq!(r.shading_planes() as u64, planes);
-        assert_eq!(r.shading_buffer().size, planes * 37 * 50 * 12);
+        assert_eq!(r.shading_buffer().size, planes * 37 * 50 * texel);
+        assert_eq!(r.shading_format().texel_bytes(), texel);
         r.destroy(&ctx);
     }
 }

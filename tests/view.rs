@@ -13,7 +13,7 @@ use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 use hfgi::error::Error;
 use hfgi::frame::view::{ViewInputs, ViewOptions, ViewPass, BACKGROUND, MAX_SAMPLES, STAGE_RASTER};
-use hfgi::frame::Renderer;
+use hfgi::frame::{Renderer, ShadingFormat};
 use hfgi::scene::model::{Camera, Environment, KeyLight, SphereBlocker};
 use hfgi::vk::{memory, Buffer, Context, Recorder};
 
@@ -25,6 +25,8 @@ struct Inputs {
     colours: Vec<[f32; 3]>,
     hb: Buffer,
     sb: Buffer,
+    /// The texel format of `sb`.
+    format: ShadingFormat,
 }
 
 impl Inputs {
@@ -42,7 +44,22 @@ impl Inputs {
         planes.extend(std::iter::repeat([-7.0f32, -7.0, -7.0]).take(w * h));
         let sb = Buffer::new(ctx, "test.shading", (planes.len() * 12) as u64, usage, MemoryLocation::GpuOnly).unwrap();
         memory::upload(ctx, &sb, 0, bytemuck::cast_slice(&planes)).unwrap();
-        Self { w, h, heights, colours, hb, sb }
+        Self { w, h, heights, colours, hb, sb, format: ShadingFormat::F32 }
+    }
+
+    /// The same field with its shading planes in `format`; the colours become what `format`
+    /// holds of them, so the reference sees exactly the texels the vertex shader must decode.
+    fn in_format(mut self, ctx: &Context, format: ShadingFormat) -> Self {
+        let mut planes = self.colours.clone();
+        planes.extend(std::iter::repeat([9000.0f32, 0.0, 9000.0]).take(self.w * self.h));
+        let bytes = format.encode(&planes);
+        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
+        let sb = Buffer::new(ctx, "test.shading", bytes.len() as u64, usage, MemoryLocation::GpuOnly).unwrap();
+        memory::upload(ctx, &sb, 0, &bytes).unwrap();
+        std::mem::replace(&mut self.sb, sb).destroy(ctx);
+        self.colours = format.decode(&format.encode(&self.colours));
+        self.format = format;
+        self
     }
 
     fn range(&self) -> (f32, f32) {
@@ -50,7 +67,12 @@ impl Inputs {
     }
 
     fn pass(&self, ctx: &Context, camera: &Camera, samples: Option<u32>) -> hfgi::error::Result<ViewPass> {
-        let inputs = ViewInputs { heights: &self.hb, shading: &self.sb, height_range: self.range() };
+        let inputs = ViewInputs {
+            heights: &self.hb,
+            shading: &self.sb,
+            shading_format: self.format,
+            height_range: self.range(),
+        };
         ViewPass::new(ctx, self.w, self.h, camera, 1.0, &inputs, &ViewOptions { samples })
     }
 
@@ -305,6 +327,24 @@ fn matches_the_cpu_ray_caster_with_one_sample() {
     inp.destroy(&ctx);
 }
 
+/// Shading planes in RGBE (`gi.shading_storage = "rgbe"`): the vertex shader's decoding
+/// (`hfgi_plane.glsl`) against the host's encoding and decoding (`ShadingFormat`). Colours
+/// spanning 2⁻⁴ … 2⁴ exercise the shared exponent.
+#[test]
+fn packed_shading_planes_are_decoded_as_the_host_decodes_them() {
+    let ctx = gpu();
+    let inp = Inputs::new(&ctx, 64, 48, |i, j| {
+        let (x, y) = (i as f32, j as f32);
+        let z = 6.0 * (-((y - 20.0).powi(2)) / 30.0).exp() + 0.05 * x;
+        let scale = 2f32.powf(8.0 * x / 64.0 - 4.0);
+        (z, [scale * (0.3 + y / 48.0), scale * 0.71, scale * (0.9 - 0.4 * y / 48.0)])
+    })
+    .in_format(&ctx, ShadingFormat::Rgbe);
+    let oblique = camera([-4.0, -12.0, 16.0], [32.0, 26.0, 2.0], 50.0, 96, 64);
+    check_against_reference(&ctx, &inp, &oblique, "RGBE shading planes");
+    inp.destroy(&ctx);
+}
+
 #[test]
 fn camera_inside_the_field_looking_straight_down() {
     let ctx = gpu();
@@ -443,7 +483,8 @@ fn bad_inputs_are_errors() {
         assert!(matches!(r, Err(Error::InvalidParameter { .. })), "{what}: {:?}", r.err());
     }
     // Buffers smaller than the field.
-    let small = ViewInputs { heights: &inp.hb, shading: &inp.sb, height_range: (0.0, 0.0) };
+    let small =
+        ViewInputs { heights: &inp.hb, shading: &inp.sb, shading_format: ShadingFormat::F32, height_range: (0.0, 0.0) };
     let r = ViewPass::new(&ctx, 16, 16, &ok, 1.0, &small, &ViewOptions::default());
     assert!(matches!(r, Err(Error::InvalidParameter { .. })), "{:?}", r.err());
     let r = ViewPass::new(&ctx, 1, 8, &ok, 1.0, &small, &ViewOptions::default());

@@ -159,7 +159,7 @@ struct hfgi_GatherPush {
     uint src_width;      // the shading planes (the field)
     uint src_height;
     uint plane;          // the shading plane read: HFGI_PLANE_DIRECT, or HFGI_PLANE_TOTAL (later bounces, working grid)
-    uint pad0;
+    uint packed;         // 1: RGBE planes (hfgi_plane.glsl)
     uint pad1;
     uint pad2;
 };
@@ -170,7 +170,7 @@ struct hfgi_ViewPush {
     uint width;         // height-field size (vertices per row)
     uint height;
     float texel_size;   // world units per texel
-    uint pad;
+    uint packed;        // 1: RGBE shading planes (hfgi_plane.glsl)
     vec4 eye;           // eye position, high part (xyz)
     vec4 eye_lo;        // low part: eye = eye + eye_lo (an f64 position in two f32)
 };

@@ -9,14 +9,16 @@
 // channel 3 + 3k + c = the incident SH coefficient T_k (colour c) of the direct light.
 #include "hfgi_shared.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
-layout(std430, binding = 0) readonly buffer Shade { float hfgi_shade[]; };   // shade planes (W×H rgb each)
+layout(std430, binding = 0) readonly buffer Shade { uint hfgi_shade[]; };    // shade planes (W×H texels each, hfgi_plane.glsl)
 layout(std430, binding = 1) writeonly buffer Levels { float hfgi_radiance_levels[]; };
 layout(std430, binding = 2) readonly buffer IncDirect { vec4 hfgi_incident_direct[]; }; // texel × n²
 layout(push_constant) uniform Push { hfgi_GatherPush pc; };
+#define HFGI_PACKED_PLANES (pc.packed != 0u)
+#include "hfgi_plane.glsl"
 
 // Texel `at` (plane · W·H + texel) of the shading planes.
 vec3 shade_rgb(uint at) {
-    return vec3(hfgi_shade[3u * at], hfgi_shade[3u * at + 1u], hfgi_shade[3u * at + 2u]);
+    return HFGI_PLANE_LOAD(hfgi_shade, at);
 }
 
 // The cell of a `to`-texel row that texel x of a `from`-texel row falls in (texel centres, edges

@@ -36,6 +36,7 @@ layout(constant_id = 7) const int HFGI_NU = 16;
 // with weight 1, so its V, U and blocker vectors are read, not interpolated from four receivers
 // (the same value; docs/performance.md §34).
 layout(constant_id = 8) const uint HFGI_SAME_GRID = 0u;
+layout(constant_id = 9) const uint HFGI_PACKED = 0u; // 1: RGBE shading planes (gi.shading_storage; hfgi_plane.glsl)
 const int HFGI_N2 = HFGI_N * HFGI_N;
 const int HFGI_UNROLLED = HFGI_MAX_SH_ORDER * HFGI_MAX_SH_ORDER; // the product matrix's unrolled sum
 
@@ -55,7 +56,7 @@ layout(std430, binding = 5) readonly buffer Consts {
     float hfgi_zh_glossy[HFGI_MAX_SH_ORDER];  // √(4π/(2l+1)) · Phong ZH
     uint hfgi_triple_count;
 };
-layout(std430, binding = 6) buffer Out { float hfgi_out[]; };                 // 6 (3 without HFGI_GLOSSY) planes × W×H × rgb
+layout(std430, binding = 6) buffer Out { uint hfgi_out[]; };                  // 6 (3 without HFGI_GLOSSY) planes × W×H texels (hfgi_plane.glsl)
 layout(std430, binding = 7) writeonly buffer Next { float hfgi_next[]; };    // indirect: the radiance levels (level 0 = the next bounce's input)
 layout(std430, binding = 8) writeonly buffer Incident { vec4 hfgi_incident[]; }; // direct: texel × n²: T (HFGI_STORE_T)
 layout(std430, binding = 9) readonly buffer Blockers { float hfgi_bv[]; };     // receivers × n² (× 2 in log mode)
@@ -64,6 +65,8 @@ layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 #include "hfgi_sh.glsl"
 #include "hfgi_address.glsl"
 #include "hfgi_store.glsl"
+#define HFGI_PACKED_PLANES (HFGI_PACKED != 0u)
+#include "hfgi_plane.glsl"
 
 #define vis_at(i) HFGI_LOAD_TEXEL(hfgi_vis_texels, i)
 // A receiver-grid value at this texel: `at(r)` of receiver r, bilinear over r00 … r11 with the
@@ -73,11 +76,11 @@ layout(push_constant) uniform Push { hfgi_ShadePush pc; };
 
 // Texel `at` (plane · W·H + texel) of the shading planes.
 vec3 hfgi_out_get(uint at) {
-    return vec3(hfgi_out[3u * at], hfgi_out[3u * at + 1u], hfgi_out[3u * at + 2u]);
+    return HFGI_PLANE_LOAD(hfgi_out, at);
 }
 
 void hfgi_out_set(uint at, vec3 v) {
-    for (uint c = 0u; c < 3u; ++c) hfgi_out[3u * at + c] = v[c];
+    HFGI_PLANE_STORE(hfgi_out, at, v)
 }
 
 float height(int x, int y) {

@@ -13,14 +13,17 @@
 // integrated over the same visible windows (Gauss–Legendre in elevation) — to the glossy ones.
 // Twin: reference::local::local_exitance.
 #include "hfgi_shared.glsl"
+#define HFGI_PACKED_PLANES (HFGI_PACKED != 0u)
+#include "hfgi_plane.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 
 layout(constant_id = 0) const int HFGI_GLOSSY = 0; // 1: the shading buffer has the glossy planes (shade::planes)
+layout(constant_id = 1) const uint HFGI_PACKED = 0u; // 1: RGBE shading planes (gi.shading_storage; hfgi_plane.glsl)
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };  // level 0 = absolute heights, W×H
 layout(std430, binding = 1) readonly buffer Lights { vec4 hfgi_lights[]; };  // per slot: (c_hi, r), (c_lo, 0), (L, 0)
 layout(std430, binding = 2) readonly buffer Nodes { vec2 hfgi_nodes[]; };    // Gauss–Legendre (x, w) on [−1, 1]
 layout(std430, binding = 3) readonly buffer Albedo { vec4 hfgi_albedo[]; };  // per texel (albedo_map)
-layout(std430, binding = 4) buffer Out { float hfgi_out[]; };                // the shading planes (rgb per texel)
+layout(std430, binding = 4) buffer Out { uint hfgi_out[]; };                 // the shading planes (hfgi_plane.glsl)
 layout(push_constant) uniform Push { hfgi_LocalPush pc; };
 #define HFGI_FIELD_H(i) hfgi_levels[i]
 #define HFGI_FIELD_W pc.width
@@ -116,7 +119,8 @@ vec2 light_irradiance(vec2 p, float base, vec3 N, vec3 R, vec3 C, float r) {
 
 // Adds `v` to texel `at` (plane · W·H + texel) of the shading planes.
 void hfgi_out_add(uint at, vec3 v) {
-    for (uint c = 0u; c < 3u; ++c) hfgi_out[3u * at + c] += v[c];
+    vec3 sum = HFGI_PLANE_LOAD(hfgi_out, at) + v;
+    HFGI_PLANE_STORE(hfgi_out, at, sum)
 }
 
 void main() {

@@ -125,7 +125,10 @@ impl LocalLightPass {
                 &shaders::SHADE_LOCAL_COMP,
                 &[DescriptorKind::StorageBuffer; 5],
                 std::mem::size_of::<LocalPush>() as u32,
-                &[(0, super::shade::glossy_planes(scene) as u32)],
+                &[
+                    (0, super::shade::glossy_planes(scene) as u32),
+                    (1, super::shade::ShadingFormat::of(scene).packed_flag()),
+                ],
                 1,
             )?);
             let [_, _, albedo, _, output] = shade.bindings();

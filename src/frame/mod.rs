@@ -26,4 +26,5 @@ pub mod water;
 pub use live::RendererOptions;
 pub use plan::{Changes, FrameState, Pending, Plan, PlannedPass, PlannedStage, Planner};
 pub use renderer::{Renderer, RendererStats, ShadingLayers};
+pub use shade::ShadingFormat;
 pub use stages::{Stage, StageInfo, STAGES};

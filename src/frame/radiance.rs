@@ -89,6 +89,8 @@ pub struct RadianceInputs<'a> {
     pub incident_direct: &'a Buffer,
     /// Whether the shading buffer has the glossy planes (`shade::planes`).
     pub glossy_planes: bool,
+    /// The shading planes' texel format.
+    pub format: super::shade::ShadingFormat,
     /// The shading planes' size (the field's).
     pub field: (usize, usize),
 }
@@ -140,7 +142,8 @@ impl RadiancePyramid {
                     src_width: inputs.field.0 as u32,
                     src_height: inputs.field.1 as u32,
                     plane: PLANE_DIRECT,
-                    pad: [0; 3],
+                    packed: inputs.format.packed_flag(),
+                    pad: [0; 2],
                 };
                 Ok(Self { pyramid, gather, set, push })
             }

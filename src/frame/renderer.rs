@@ -13,7 +13,7 @@ use super::local::LocalLightPass;
 use super::plan::{FrameState, Plan, Planner, Stage};
 use super::pyramid::{HeightPyramid, LevelsMemory, PyramidKind};
 use super::pyramid_max::{uses_max_bound, MaxPyramid};
-use super::shade::{ShadePass, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
+use super::shade::{ShadePass, ShadingFormat, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL};
 use super::visibility::VisibilityPass;
 use crate::error::{Error, Result};
 pub use crate::rules::scene::{height_origin, needs_indirect, vector_pyramid};
@@ -364,13 +364,20 @@ impl Renderer {
         self.heights_changed = true;
     }
 
-    /// The shading texture ([`ShadePass`] output): an RGB `f32` triple per texel (12 bytes,
-    /// tightly packed), planes `W × H` in the order total, direct, indirect, then for a glossy
-    /// surface glossy and two internal ones ([`Renderer::shading_planes`]: 6, or 3 for a
-    /// surface created without specular). After `record`, written by compute; a reader in
-    /// another stage adds its own barrier (see `docs/integration.md`).
+    /// The shading texture ([`ShadePass`] output): one RGB texel per field texel in
+    /// [`Renderer::shading_format`] (`gi.shading_storage`: an `f32` triple, 12 bytes, tightly
+    /// packed, by default; one RGBE word, 4 bytes, with `"rgbe"`), planes `W × H` in the
+    /// order total, direct, indirect, then for a glossy surface glossy and two internal ones
+    /// ([`Renderer::shading_planes`]: 6, or 3 for a surface created without specular). After
+    /// `record`, written by compute; a reader in another stage adds its own barrier (see
+    /// `docs/integration.md`).
     pub fn shading_buffer(&self) -> &Buffer {
         self.shade.output()
+    }
+
+    /// The texel format of [`Renderer::shading_buffer`] ([`ShadingFormat::decode`] reads it).
+    pub fn shading_format(&self) -> ShadingFormat {
+        self.shade.format()
     }
 
     /// Planes in [`Renderer::shading_buffer`]: 6 for a surface created with a specular colour,

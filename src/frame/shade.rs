@@ -1,14 +1,14 @@
 //! Stage `shade.direct` (NS09 §7; docs/direct.md §5–6): direct diffuse and Phong shading at
 //! full resolution from the light sets' SH visibility.
 //!
-//! Output: [`ShadePass::output`], an RGB `f32` triple per texel (12 bytes, tightly packed),
-//! [`planes`] planes of `W × H`: [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`] and, for
-//! a glossy surface only (`material.specular` set at creation), [`LAYER_GLOSSY`] and the
-//! internal [`PLANE_GLOSSY_DIRECT`], [`PLANE_GLOSSY_INDIRECT`] (zero until an indirect bounce
-//! writes them). Each shading dispatch recomposes total and glossy, so direct and indirect may be
-//! updated on different frames (docs/indirect.md §5). After `record`, a
-//! compute→compute barrier has been recorded; for vertex/fragment or transfer reads add the
-//! matching barrier.
+//! Output: [`ShadePass::output`], one RGB texel per field texel in the [`ShadingFormat`] of
+//! `gi.shading_storage` (an `f32` triple, or one shared-exponent word), [`planes`] planes of
+//! `W × H`: [`LAYER_TOTAL`], [`LAYER_DIRECT`], [`LAYER_INDIRECT`] and, for a glossy surface
+//! only (`material.specular` set at creation), [`LAYER_GLOSSY`] and the internal
+//! [`PLANE_GLOSSY_DIRECT`], [`PLANE_GLOSSY_INDIRECT`] (zero until an indirect bounce writes them).
+//! Each shading dispatch recomposes total and glossy, so direct and indirect may be updated on
+//! different frames (docs/indirect.md §5). After `record`, a compute→compute barrier has been
+//! recorded; for vertex/fragment or transfer reads add the matching barrier.
 
 use std::f64::consts::PI;
 
@@ -28,6 +28,9 @@ use crate::scene::model::{Albedo, DiffuseLobe, Scene};
 use crate::shaders;
 use crate::vk::pipeline::{groups, Bind};
 use crate::vk::{barrier, memory, Buffer, ComputePipeline, Context, DescriptorKind, Recorder};
+
+mod format;
+pub use format::ShadingFormat;
 
 pub const STAGE_DIRECT: &str = super::stages::stage_name("shade.direct");
 
@@ -223,7 +226,7 @@ pub(crate) fn upload_sizes(scene: &Scene) -> [(&'static str, u64); 4] {
 /// `Some(floats per channel of the radiance levels buffer)`, where it writes the next bounce's
 /// input).
 /// The indirect mode reads `U`'s [`u_coefficients`](crate::rules::scene::u_coefficients).
-pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 9] {
+pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 10] {
     let (w, h) = (scene.field.width(), scene.field.height());
     [
         (0, scene.gi.sh_order as u32),
@@ -235,6 +238,7 @@ pub(crate) fn spec(scene: &Scene, next_stride: Option<u32>) -> [(u32, u32); 9] {
         (6, next_stride.unwrap_or(0)),
         (7, crate::rules::scene::u_coefficients(scene) as u32),
         (8, (scene.gi.working_size(w, h) == (w, h)) as u32),
+        (9, ShadingFormat::of(scene).packed_flag()),
     ]
 }
 
@@ -247,9 +251,9 @@ pub(crate) fn upload_bytes(len: usize) -> u64 {
     len.max(16) as u64
 }
 
-/// Bytes of [`OUTPUT_BUFFER`]: [`planes`] planes of `W × H` RGB `f32` triples.
+/// Bytes of [`OUTPUT_BUFFER`]: [`planes`] planes of `W × H` texels of [`ShadingFormat::of`].
 pub(crate) fn output_bytes(scene: &Scene) -> u64 {
-    (planes(scene) * scene.field.width() * scene.field.height() * 12) as u64
+    (planes(scene) * scene.field.width() * scene.field.height()) as u64 * ShadingFormat::of(scene).texel_bytes()
 }
 
 /// Bytes of [`INCIDENT_BUFFER`]: `T` per texel (`n²` `vec4`s) for the glossy vector pyramid
@@ -273,6 +277,8 @@ pub struct ShadePass {
     push: ShadePush,
     /// [`planes`] of the scene at creation.
     planes: usize,
+    /// The planes' texel format ([`ShadingFormat::of`] the scene at creation).
+    format: ShadingFormat,
 }
 
 /// The shading shader's bindings (glsl/shade/direct.comp.glsl, both modes): texel views of
@@ -340,8 +346,9 @@ impl ShadePass {
         let incident = bufs.pop().expect("incident");
         let output = bufs.pop().expect("output");
         let push = Self::push_constants(scene, pyramid.work(), vis.set_count());
-        let planes = planes(scene);
-        Ok(Self { pipeline: pipeline.expect("pipeline"), descriptors, buffers: bufs, output, incident, push, planes })
+        let (planes, format) = (planes(scene), ShadingFormat::of(scene));
+        let pipeline = pipeline.expect("pipeline");
+        Ok(Self { pipeline, descriptors, buffers: bufs, output, incident, push, planes, format })
     }
 
     /// Creates into `bufs` (which the caller destroys on an error) the uploaded buffers of
@@ -406,10 +413,15 @@ impl ShadePass {
         });
     }
 
-    /// The shading buffer: [`ShadePass::planes`] planes × W×H × RGB `f32` (the module docs
-    /// list them).
+    /// The shading buffer: [`ShadePass::planes`] planes × W×H texels of
+    /// [`ShadePass::format`] (the module docs list them).
     pub fn output(&self) -> &Buffer {
         &self.output
+    }
+
+    /// The texel format of [`ShadePass::output`].
+    pub fn format(&self) -> ShadingFormat {
+        self.format
     }
 
     /// Planes in the shading buffer ([`planes`] of the scene at creation: 6, or 3 without the
@@ -447,18 +459,22 @@ impl ShadePass {
         if layer >= self.planes && layer < PLANES {
             return Ok(vec![[0.0; 3]; texels]);
         }
-        let v = self.read_plane(ctx, layer)?;
-        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        self.download_plane(ctx, layer)
     }
 
-    /// Diagnostics: plane `plane` (< [`ShadePass::planes`]) of the shading buffer as raw
+    /// Diagnostics: plane `plane` (< [`ShadePass::planes`]) of the shading buffer decoded to
     /// floats (RGB per texel), read back (waits).
     pub fn read_plane(&self, ctx: &Context, plane: usize) -> Result<Vec<f32>> {
+        Ok(self.download_plane(ctx, plane)?.into_iter().flatten().collect())
+    }
+
+    /// Plane `plane` (< [`ShadePass::planes`]) read back and decoded (waits).
+    fn download_plane(&self, ctx: &Context, plane: usize) -> Result<Vec<[f32; 3]>> {
         if plane >= self.planes {
             return Err(crate::error::Error::param("shading plane", plane, format!("< {}", self.planes)));
         }
-        let floats = (self.push.width * self.push.height) as u64 * 3;
-        memory::download_f32(ctx, &self.output, plane as u64 * floats, floats)
+        let bytes = (self.push.width * self.push.height) as u64 * self.format.texel_bytes();
+        Ok(self.format.decode(&memory::download(ctx, &self.output, plane as u64 * bytes, bytes)?))
     }
 
     /// Diagnostics: the incident SH radiance `T` of the direct light (`W·H·n²` `vec4`s), read

@@ -361,7 +361,9 @@ pub struct GatherPush {
     /// The shading plane read (`PLANE_DIRECT` for bounce 1; `PLANE_TOTAL` for a later bounce of
     /// a working-grid pyramid, where the previous indirect shade left its exit radiance).
     pub plane: u32,
-    pub pad: [u32; 3],
+    /// 1: RGBE shading planes (`shade::ShadingFormat::Rgbe`; `hfgi_plane.glsl`).
+    pub packed: u32,
+    pub pad: [u32; 2],
 }
 
 const _: () = assert!(std::mem::size_of::<IndirectPush>() == 80);
@@ -388,7 +390,8 @@ pub struct ViewPush {
     pub width: u32,
     pub height: u32,
     pub texel_size: f32,
-    pub pad: u32,
+    /// 1: RGBE shading planes (`shade::ShadingFormat::Rgbe`; `hfgi_plane.glsl`).
+    pub packed: u32,
     /// The eye position as a high and a low f32 (`eye + eye_lo` = the f64 position), so that
     /// vertices far from 0 (heights near 1e7) keep their precision relative to the eye.
     pub eye: [f32; 4],

@@ -5,7 +5,7 @@
 use ash::vk;
 
 use super::renderer::{height_origin, Renderer, ShadingLayers};
-use super::shade::{LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL, PLANE_GLOSSY_INDIRECT};
+use super::shade::{ShadingFormat, LAYER_DIRECT, LAYER_GLOSSY, LAYER_INDIRECT, LAYER_TOTAL, PLANE_GLOSSY_INDIRECT};
 use crate::error::Result;
 use crate::scene::HeightField;
 use crate::vk::{barrier, Recorder, StagingRing};
@@ -27,27 +27,22 @@ pub struct LayersReadback {
     height: usize,
     /// How many of [`PLANES`] were copied (the rest are zero).
     copied: usize,
+    /// The texel format of the copied planes.
+    format: ShadingFormat,
 }
 
 impl LayersReadback {
     /// The layers, once the host has waited for the command buffer that copied them.
     pub fn layers(&self, ring: &mut StagingRing) -> Result<ShadingLayers> {
         let texels = self.width * self.height;
-        let plane = (texels * 12) as u64;
+        let plane = texels as u64 * self.format.texel_bytes();
         let mut out: Vec<Vec<[f32; 3]>> = Vec::with_capacity(PLANES.len());
         for i in 0..PLANES.len() {
             if i >= self.copied {
                 out.push(vec![[0.0; 3]; texels]);
                 continue;
             }
-            let bytes = ring.read(self.offset + i as u64 * plane, plane)?;
-            let v: Vec<[f32; 3]> = bytes
-                .chunks_exact(12)
-                .map(|c| {
-                    std::array::from_fn(|k| f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]))
-                })
-                .collect();
-            out.push(v);
+            out.push(self.format.decode(ring.read(self.offset + i as u64 * plane, plane)?));
         }
         let mut it = out.into_iter();
         let mut next = || it.next().unwrap_or_default();
@@ -94,12 +89,17 @@ impl Renderer {
         Ok(())
     }
 
-    /// Bytes one [`Renderer::record_read_layers`] takes from a read-back ring: `12·W·H` per
-    /// plane it copies (5 for a glossy surface, 3 for a diffuse one), before the ring's
-    /// alignment of the start.
+    /// Bytes one [`Renderer::record_read_layers`] takes from a read-back ring: `W·H` texels of
+    /// [`Renderer::shading_format`] per plane it copies (5 for a glossy surface, 3 for a
+    /// diffuse one), before the ring's alignment of the start.
     pub fn read_layers_bytes(&self) -> u64 {
+        self.plane_bytes() * self.copied_planes() as u64
+    }
+
+    /// Bytes of one plane of the shading buffer.
+    fn plane_bytes(&self) -> u64 {
         let l = self.pyramid.layout().levels[0];
-        l.width as u64 * l.height as u64 * 12 * self.copied_planes() as u64
+        l.width as u64 * l.height as u64 * self.shade.format().texel_bytes()
     }
 
     /// How many of [`PLANES`] the shading buffer has (the glossy ones only for a glossy surface).
@@ -115,7 +115,7 @@ impl Renderer {
     pub fn record_read_layers(&self, rec: &mut Recorder, ring: &mut StagingRing) -> Result<LayersReadback> {
         let l = self.pyramid.layout().levels[0];
         let (width, height) = (l.width as usize, l.height as usize);
-        let plane = (width * height * 12) as u64;
+        let plane = self.plane_bytes();
         let copied = self.copied_planes();
         let offset = ring.reserve(self.read_layers_bytes())?;
         let (src, dst) = (self.shade.output().raw, ring.buffer().raw);
@@ -134,6 +134,6 @@ impl Renderer {
             unsafe { ctx.device().cmd_copy_buffer(cmd, src, dst, &regions) };
             barrier::transfer_to_host(ctx, cmd);
         });
-        Ok(LayersReadback { offset, width, height, copied })
+        Ok(LayersReadback { offset, width, height, copied, format: self.shade.format() })
     }
 }

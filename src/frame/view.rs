@@ -54,6 +54,7 @@ pub(crate) use spheres::{sphere_buffer_bytes, sphere_light_bytes, SPHERE_BUFFER,
 pub use spheres::{sphere_is_live, SphereLighting, SPHERE_SLICES, SPHERE_STACKS, SPHERE_VERTICES};
 use spheres::{GpuSphere, SphereDraw};
 
+use super::shade::ShadingFormat;
 use super::shared::ViewPush;
 use super::Renderer;
 use crate::error::{Error, Result};
@@ -92,8 +93,11 @@ pub struct ViewOptions {
 pub struct ViewInputs<'a> {
     /// Heights, `f32`, row-major `W × H` from offset 0 (storage usage).
     pub heights: &'a Buffer,
-    /// Shading texture, `vec4` per texel; texels `[0, W·H)` (plane 0) are the colour.
+    /// Shading texture: texels `[0, W·H)` (plane 0, the total) in `shading_format` are the
+    /// colour (`Renderer::shading_buffer`'s layout).
     pub shading: &'a Buffer,
+    /// The texel format of `shading` (`Renderer::shading_format`).
+    pub shading_format: ShadingFormat,
     /// Lowest and highest height: with the field's x/y extent, the bounding box that sets the
     /// near and far planes. Geometry outside it may be clipped; update it with
     /// [`ViewPass::set_height_range`] when the heights change range.
@@ -172,7 +176,10 @@ fn row_indices(width: usize) -> Vec<u32> {
 /// large enough for it, and a camera image within the device's largest 2D image.
 fn check_inputs(ctx: &Context, width: usize, height: usize, camera: &Camera, inputs: &ViewInputs) -> Result<()> {
     let texels = check_field_size(width, height)?;
-    for (name, buf, need) in [("heights", inputs.heights, texels * 4), ("shading", inputs.shading, texels * 12)] {
+    for (name, buf, need) in [
+        ("heights", inputs.heights, texels * 4),
+        ("shading", inputs.shading, texels * inputs.shading_format.texel_bytes()),
+    ] {
         if buf.size < need {
             return Err(Error::param(
                 format!("view: {name} buffer '{}' size", buf.name),
@@ -205,6 +212,8 @@ pub struct ViewPass {
     choice: TargetChoice,
     field: (usize, usize),
     texel_size: f64,
+    /// The texel format of the shading buffer read.
+    shading_format: ShadingFormat,
     /// The heights buffer (bound to the sphere pipeline too, for the field's cast shadow).
     heights: vk::DescriptorBufferInfo,
     camera: Camera,
@@ -275,6 +284,7 @@ impl ViewPass {
             choice,
             field: (width, height),
             texel_size,
+            shading_format: inputs.shading_format,
             heights: inputs.heights.whole(),
             camera: camera.clone(),
             height_range: inputs.height_range,
@@ -363,6 +373,7 @@ impl ViewPass {
         let inputs = ViewInputs {
             heights: renderer.heights_buffer(),
             shading: renderer.shading_buffer(),
+            shading_format: renderer.shading_format(),
             height_range: scene.field.range(),
         };
         let mut me =

@@ -13,6 +13,7 @@ pub mod logcap;
 pub mod nlp;
 pub mod overlap;
 pub mod quadrature;
+pub mod rgbe;
 pub mod sh;
 pub mod shexp;
 pub mod triple;

@@ -43,10 +43,15 @@ pub fn scene(field: HeightField) -> Scene {
         key_lights: vec![key_light(30.0, 200.0, 5.0, 4.0)],
         local_lights: vec![],
         spheres: vec![],
-        // f32 storage: the tests that use this scene compare the GPU with the f64 twin or with
-        // analytic values at tolerances below a half's rounding (2⁻¹¹); the default f16 storage
-        // is tested against f32 and the exact reference in tests/storage.rs.
-        gi: GiSettings { storage: hfgi::scene::model::Storage::F32, ..GiSettings::default() },
+        // f32 storage and f32 shading planes: the tests that use this scene compare the GPU with
+        // the f64 twin or with analytic values at tolerances below a half's rounding (2⁻¹¹); the
+        // default f16 storage and the RGBE planes are tested against f32 and the exact reference
+        // in tests/storage.rs.
+        gi: GiSettings {
+            storage: hfgi::scene::model::Storage::F32,
+            shading_storage: hfgi::scene::model::ShadingFormat::F32,
+            ..GiSettings::default()
+        },
         camera,
         animation: Default::default(),
     }

@@ -183,6 +183,7 @@ pub(super) fn radiance_pyramid(
             shade: shade.output(),
             incident_direct: shade.incident(),
             glossy_planes: crate::frame::shade::glossy_planes(scene),
+            format: shade.format(),
             field: (scene.field.width(), scene.field.height()),
         },
         at,

@@ -151,8 +151,8 @@ fn every_shared_struct_matches_the_glsl_header_field_by_field() {
         radiance_planes,
         radiance_scale
     });
-    layout!(GatherPush { width, height, channel_stride, vector, n2, glossy, src_width, src_height, plane });
-    layout!(ViewPush { view_proj, width, height, texel_size, eye, eye_lo });
+    layout!(GatherPush { width, height, channel_stride, vector, n2, glossy, src_width, src_height, plane, packed });
+    layout!(ViewPush { view_proj, width, height, texel_size, packed, eye, eye_lo });
     layout!(WaterPush { width, height, wrap, drop_count, k, retain, rest_level, scale, drops });
     layout!(TruthPush {
         width,

@@ -200,7 +200,7 @@ impl ViewPass {
             width: self.field.0 as u32,
             height: self.field.1 as u32,
             texel_size: self.texel_size as f32,
-            pad: 0,
+            packed: self.shading_format.packed_flag(),
             eye: [hi[0], hi[1], hi[2], 0.0],
             eye_lo: [lo[0], lo[1], lo[2], 0.0],
         };

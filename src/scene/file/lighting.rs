@@ -263,6 +263,7 @@ impl Ctx<'_> {
             visibility: parse_opt(&raw.visibility).map_err(param)?.unwrap_or(d.visibility),
             diffuse_lobe: parse_opt(&raw.diffuse_lobe).map_err(param)?.unwrap_or(d.diffuse_lobe),
             storage: parse_opt(&raw.storage).map_err(param)?.unwrap_or(d.storage),
+            shading_storage: parse_opt(&raw.shading_storage).map_err(param)?.unwrap_or(d.shading_storage),
             sweep_near: raw.sweep_near.unwrap_or(d.sweep_near),
             blocker_epsilon: raw.blocker_epsilon.unwrap_or(d.blocker_epsilon),
             blocker_ratio: raw.blocker_ratio.unwrap_or(d.blocker_ratio),

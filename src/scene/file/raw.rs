@@ -109,6 +109,7 @@ pub(super) struct RawGi {
     pub(super) visibility: Option<String>,
     pub(super) diffuse_lobe: Option<String>,
     pub(super) storage: Option<String>,
+    pub(super) shading_storage: Option<String>,
     pub(super) sweep_near: Option<u32>,
     pub(super) blocker_epsilon: Option<f64>,
     pub(super) blocker_ratio: Option<bool>,

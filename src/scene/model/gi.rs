@@ -2,7 +2,7 @@
 
 use super::{
     BlockerExp, BlockerKeyLights, BlockerLogCap, BlockerShading, DiffuseLobe, ElevationBasis, GlossyPyramid, Horizon,
-    Interpolation, Level0, OmegaMin, PyramidMode, Quality, ScanReach, Storage, VisibilityMethod,
+    Interpolation, Level0, OmegaMin, PyramidMode, Quality, ScanReach, ShadingFormat, Storage, VisibilityMethod,
 };
 use crate::error::{Error, Result};
 
@@ -86,6 +86,8 @@ pub struct GiSettings {
     /// Storage of the visibility and IR vectors and the radiance stack (f16 by default, at
     /// half the memory of f32).
     pub storage: Storage,
+    /// The shading planes' texel format (f32 by default; RGBE at a third of the memory).
+    pub shading_storage: ShadingFormat,
     /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
     /// docs/direct.md §7), 0..=64; the sweep lines give the horizon beyond.
     pub sweep_near: u32,
@@ -168,6 +170,7 @@ impl GiSettings {
             visibility: VisibilityMethod::Ladder,
             diffuse_lobe: DiffuseLobe::Sh,
             storage: Storage::F16,
+            shading_storage: ShadingFormat::F32,
             sweep_near: 16,
             blocker_epsilon: 0.2,
             blocker_ratio: true,
@@ -195,6 +198,7 @@ impl GiSettings {
             amortize: self.amortize,
             visibility: self.visibility,
             storage: self.storage,
+            shading_storage: self.shading_storage,
             sweep_near: self.sweep_near,
             replay: self.replay,
             ..GiSettings::preset(q)
@@ -207,7 +211,7 @@ impl GiSettings {
         format!(
             "quality={} sh_order={} azimuths={} level_step={} level_offset={} subsample={} interpolation={} \
              pyramid={} radiance_level_step={} radiance_level_offset={} level0={} horizon={} near_steps={} \
-             radial_probes={} radial_probes_later={} azimuths_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} sweep_near={} key_light_azimuths={} bounces={} \
+             radial_probes={} radial_probes_later={} azimuths_later={} scan_reach={} omega_min={} elevation_basis={} visibility={} storage={} shading_storage={} sweep_near={} key_light_azimuths={} bounces={} \
              local_light_azimuths={} blocker_epsilon={} blocker_ratio={} blocker_exp={} blocker_shading={} blocker_log_cap={} blocker_key_lights={} replay={} \
              diffuse_lobe={} azimuth_offset={} cast_merge={}",
             self.quality,
@@ -231,6 +235,7 @@ impl GiSettings {
             self.elevation_basis,
             self.visibility,
             self.storage,
+            self.shading_storage,
             self.sweep_near,
             self.key_light_azimuths,
             self.bounces,
