@@ -193,14 +193,17 @@ fn changes_the_renderer_was_not_built_for_are_typed_errors() {
 }
 
 /// For a glossy surface (6 shading planes) and a diffuse one (3: its glossy layers read as
-/// zero both ways).
+/// zero both ways), with f32 planes and with RGBE planes (`gi.shading_storage`: the ring's
+/// read-back decodes them as the blocking one does).
 #[test]
 fn creation_submits_once_and_recorded_transfers_equal_the_blocking_helpers() {
     use hfgi::vk::{Recorder, RingKind, StagingRing};
     let ctx = gpu();
     let mut matte = base();
     matte.material.specular = None;
-    for s in [base(), matte] {
+    let mut packed = base();
+    packed.gi.shading_storage = hfgi::scene::model::ShadingFormat::Rgbe;
+    for s in [base(), matte, packed] {
         let before = ctx.submit_count();
         let mut blocking = Renderer::new(&ctx, &s).unwrap();
         assert_eq!(ctx.submit_count() - before, 1, "creating a renderer submits once");
@@ -212,9 +215,11 @@ fn creation_submits_once_and_recorded_transfers_equal_the_blocking_helpers() {
         record_frame(&ctx, &mut blocking);
         let want = layers(&ctx, &blocking);
         let mut up = StagingRing::new(&ctx, "test.upload", 24 * 24 * 4, RingKind::Upload).unwrap();
-        // RGB f32 per texel, 5 planes for the glossy surface, 3 for the diffuse one.
+        // 5 planes for the glossy surface, 3 for the diffuse one; an RGB f32 triple or an RGBE
+        // word per texel.
         let planes = if s.material.specular.is_some() { 5 } else { 3 };
-        assert_eq!(recorded.read_layers_bytes(), planes * 24 * 24 * 12);
+        let texel = if s.gi.shading_storage == hfgi::scene::model::ShadingFormat::Rgbe { 4 } else { 12 };
+        assert_eq!(recorded.read_layers_bytes(), planes * 24 * 24 * texel);
         let mut down =
             StagingRing::new(&ctx, "test.readback", recorded.read_layers_bytes(), RingKind::Readback).unwrap();
         let submits = ctx.submit_count();

@@ -125,8 +125,8 @@ fn f16_renders_every_mode_like_f32() {
 /// RGBE shading planes (`gi.shading_storage = "rgbe"`) are words as the host packs them
 /// (`math::rgbe::pack`, the Vulkan rule): every word is the packing of its own value (shared
 /// exponent from the largest channel, that channel's mantissa normalised to 128…255), on a
-/// glossy surface with several bounces, sub-sampled and not (the indirect shade's and the total's
-/// read-modify-writes), and every value is finite.
+/// glossy surface with several bounces and a local light, sub-sampled and not (the indirect
+/// shade's, the local lights' and the total's read-modify-writes), and every value is finite.
 #[test]
 fn rgbe_shading_planes_are_the_hosts_words() {
     let ctx = gpu();
@@ -137,7 +137,13 @@ fn rgbe_shading_planes_are_the_hosts_words() {
         s.gi.bounces = 2;
         s.key_lights = vec![key_light(35.0, 60.0, 4.0, 3.0)];
         if glossy {
+            // With a local light too: shade.local_lights adds to the packed planes.
             s.material.specular = Some([0.2, 0.25, 0.3]);
+            s.local_lights = vec![hfgi::scene::model::LocalLight {
+                position: glam::DVec3::new(18.0, 14.0, 9.0),
+                radius: 1.5,
+                radiance: [40.0, 30.0, 20.0],
+            }];
         }
         let mut s = with_storage(&s, Storage::F16);
         s.gi.shading_storage = ShadingFormat::Rgbe;

@@ -3,9 +3,8 @@
 // shared-exponent word (Ward's RGBE: mantissas in bits 0-7, 8-15, 16-23, exponent in 24-31, a
 // channel m · 2^(e − 135)), packed with the exponent rule of the Vulkan specification's
 // shared-exponent conversion and rounding to nearest, ties to even, exactly as src/math/rgbe.rs
-// packs it. The plane buffers are arrays
-// of 32-bit words (`uint`). Needs HFGI_PACKED_PLANES (a bool expression: the words are RGBE)
-// defined before the include.
+// packs it. The plane buffers are arrays of 32-bit words (`uint`). Needs HFGI_PACKED_PLANES (a
+// bool expression: the words are RGBE) defined before the include.
 #ifndef HFGI_PLANE_GLSL
 #define HFGI_PLANE_GLSL
 

@@ -13,12 +13,12 @@
 // integrated over the same visible windows (Gauss–Legendre in elevation) — to the glossy ones.
 // Twin: reference::local::local_exitance.
 #include "hfgi_shared.glsl"
-#define HFGI_PACKED_PLANES (HFGI_PACKED != 0u)
-#include "hfgi_plane.glsl"
 layout(local_size_x = HFGI_WORKGROUP, local_size_y = HFGI_WORKGROUP) in;
 
 layout(constant_id = 0) const int HFGI_GLOSSY = 0; // 1: the shading buffer has the glossy planes (shade::planes)
 layout(constant_id = 1) const uint HFGI_PACKED = 0u; // 1: RGBE shading planes (gi.shading_storage; hfgi_plane.glsl)
+#define HFGI_PACKED_PLANES (HFGI_PACKED != 0u)
+#include "hfgi_plane.glsl"
 layout(std430, binding = 0) readonly buffer Levels { float hfgi_levels[]; };  // level 0 = absolute heights, W×H
 layout(std430, binding = 1) readonly buffer Lights { vec4 hfgi_lights[]; };  // per slot: (c_hi, r), (c_lo, 0), (L, 0)
 layout(std430, binding = 2) readonly buffer Nodes { vec2 hfgi_nodes[]; };    // Gauss–Legendre (x, w) on [−1, 1]
