@@ -123,7 +123,7 @@ fn f16_renders_every_mode_like_f32() {
 }
 
 /// RGBE shading planes (`gi.shading_storage = "rgbe"`) are words as the host packs them
-/// (`math::rgbe::pack`, the Vulkan rule): every word is the packing of its own value (shared
+/// (`math::rgbe::pack`: the Vulkan rule's exponent, ties to even): every word is the packing of its own value (shared
 /// exponent from the largest channel, that channel's mantissa normalised to 128…255), on a
 /// glossy surface with several bounces and a local light, sub-sampled and not (the indirect
 /// shade's, the local lights' and the total's read-modify-writes), and every value is finite.
@@ -223,10 +223,7 @@ fn rgbe_planes_add_little_error_on_terraces_and_steep_sub_sampled() {
 #[test]
 fn rgbe_planes_keep_physical_units() {
     let ctx = gpu();
-    let mut s = scene(rough_field(32, 24, 9));
-    s.gi.azimuths = 8;
-    s.gi.bounces = 1;
-    s.key_lights = vec![key_light(40.0, 30.0, 0.27, 1e11)];
+    let mut s = physical_units_scene();
     let a = render_layers(&ctx, &s);
     s.gi.shading_storage = ShadingFormat::Rgbe;
     let b = render_layers(&ctx, &s);
@@ -236,6 +233,16 @@ fn rgbe_planes_keep_physical_units() {
         assert!(e > 0.0 && e <= 5e-3, "{layer}: RGBE vs f32 planes {e:e}");
         eprintln!("key light 1e11: {layer} RGBE vs f32 planes {e:.2e}");
     }
+}
+
+/// A key light of radiance 10¹¹ (within `limits::MAX_RADIANCE`) on a 32×24 rough field, one
+/// bounce: the f16 pre-exposure's and the RGBE planes' range test.
+fn physical_units_scene() -> Scene {
+    let mut s = scene(rough_field(32, 24, 9));
+    s.gi.azimuths = 8;
+    s.gi.bounces = 1;
+    s.key_lights = vec![key_light(40.0, 30.0, 0.27, 1e11)];
+    s
 }
 
 fn load(file: &str, size: &str, extra: &[&str]) -> Scene {
@@ -268,10 +275,7 @@ fn f16_adds_no_error_on_a_steep_non_square_field_below_zero() {
 #[test]
 fn f16_is_pre_exposed_so_physical_units_keep_their_precision() {
     let ctx = gpu();
-    let mut s = scene(rough_field(32, 24, 9));
-    s.gi.azimuths = 8;
-    s.gi.bounces = 1;
-    s.key_lights = vec![key_light(40.0, 30.0, 0.27, 1e11)];
+    let s = physical_units_scene();
     let a = render_layers(&ctx, &with_storage(&s, Storage::F32));
     let b = render_layers(&ctx, &with_storage(&s, Storage::F16));
     for (layer, x, y) in layer_pairs(&a, &b) {

@@ -1,8 +1,7 @@
 //! The shared-exponent RGB word of the shading planes (Ward's RGBE, as in Radiance `.hdr` files,
 //! with the exponent rule of the Vulkan specification's shared-exponent conversion and rounding
-//! to nearest, ties to even): three 8-bit
-//! mantissas `r`, `g`, `b` (bits 0–7, 8–15, 16–23) and one 8-bit exponent `e` (bits 24–31), the
-//! value of a channel `m · 2^(e − 127 − 8)`. The shading planes use it with `gi.shading_storage =
+//! to nearest, ties to even): three 8-bit mantissas `r`, `g`, `b` (bits 0–7, 8–15, 16–23) and
+//! one 8-bit exponent `e` (bits 24–31), the value of a channel `m · 2^(e − 127 − 8)`. The shading planes use it with `gi.shading_storage =
 //! "rgbe"` (docs/integration.md, "Shading buffer"); `glsl/inc/hfgi_plane.glsl` packs with the same
 //! rounding, so that this module reproduces the GPU's words bit for bit.
 //!
@@ -32,6 +31,12 @@ fn pow2(k: i32) -> f32 {
     }
 }
 
+/// `v · 2^k` for `k` in −270 … 270, in two exact steps (`2^k` alone may leave f32's range);
+/// `hfgi_rgbe_scale` in the shaders.
+fn scale(v: f32, k: i32) -> f32 {
+    v * pow2(k / 2) * pow2(k - k / 2)
+}
+
 /// `⌊log₂ x⌋` of a positive f32, exactly (GLSL: `frexp`).
 fn floor_log2(x: f32) -> i32 {
     let bits = x.to_bits();
@@ -45,13 +50,12 @@ fn floor_log2(x: f32) -> i32 {
 }
 
 /// The mantissa of `v` at exponent field `e`: `v · 2^(B + N − e)` rounded to nearest, ties to
-/// even, the scaling split in two exact steps (the factor alone may leave f32's range). Ties are
+/// even ([`scale`]). Ties are
 /// common — a sum of two planes' texels (the total) often falls half-way between two steps —
 /// and rounding them up (the Vulkan rule's `⌊x + ½⌋`) biased the total by +2.5e-4…5.3e-4
 /// (docs/performance.md §36).
 fn mantissa(v: f32, e: i32) -> f32 {
-    let k = BIAS + MANTISSA_BITS - e;
-    (v * pow2(k / 2) * pow2(k - k / 2)).round_ties_even()
+    scale(v, BIAS + MANTISSA_BITS - e).round_ties_even()
 }
 
 /// Packs `rgb`: `e = max(−B − 1, ⌊log₂ max⌋) + 1 + B`, plus one where the largest mantissa
@@ -84,7 +88,7 @@ pub fn unpack(w: u32) -> [f32; 3] {
         return [f32::NAN; 3];
     }
     let k = (w >> 24) as i32 - BIAS - MANTISSA_BITS;
-    [w & 255, (w >> 8) & 255, (w >> 16) & 255].map(|m| m as f32 * pow2(k / 2) * pow2(k - k / 2))
+    [w & 255, (w >> 8) & 255, (w >> 16) & 255].map(|m| scale(m as f32, k))
 }
 
 #[cfg(test)]

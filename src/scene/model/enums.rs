@@ -243,7 +243,7 @@ settings_enum!(
         /// One shared-exponent word per texel, 4 bytes (`crate::math::rgbe`, Ward's RGBE:
         /// 8-bit mantissas, an 8-bit exponent): a third of f32's memory, 8 significant bits of
         /// the largest channel (0.15–0.3% relative L2 per layer, which raises the total's error
-        /// by 0.01–0.02 points on the hard fields), f32's range (no pre-exposure), negative
+        /// by 0.009–0.02 points on the hard fields), f32's range (no pre-exposure), negative
         /// channels clamped to 0, a non-finite texel read as NaN.
         Rgbe = "rgbe",
         /// An RGB `f32` triple per texel, 12 bytes. The default.
