@@ -248,9 +248,9 @@ fn frames(
 ) -> Result<(u64, u64, Result<(), String>), String> {
     let (submits, pipelines) = (ctx.submit_count(), ctx.pipelines_created());
     let bytes = (SIZE * SIZE * 4) as u64;
-    // Plane 0 (the total): one texel per sample in the renderer's format (an RGB f32 triple by
-    // default, one RGBE word with gi.shading_storage = "rgbe"; ShadingFormat::decode reads
-    // both).
+    // Plane 0 (the total): one texel per sample in the renderer's format (an RGB f32 triple at
+    // full-rate GI, one RGBE word with gi.shading_storage = "rgbe" or sub-sampled GI;
+    // ShadingFormat::decode reads both).
     let format = renderer.shading_format();
     let shading = (SIZE * SIZE) as u64 * format.texel_bytes();
     let pool_info = vk::CommandPoolCreateInfo::default()

@@ -202,7 +202,7 @@ fn creation_submits_once_and_recorded_transfers_equal_the_blocking_helpers() {
     let mut matte = base();
     matte.material.specular = None;
     let mut packed = base();
-    packed.gi.shading_storage = hfgi::scene::model::ShadingFormat::Rgbe;
+    packed.gi.shading_storage = hfgi::scene::model::ShadingStorage::Rgbe;
     for s in [base(), matte, packed] {
         let before = ctx.submit_count();
         let mut blocking = Renderer::new(&ctx, &s).unwrap();
@@ -218,7 +218,7 @@ fn creation_submits_once_and_recorded_transfers_equal_the_blocking_helpers() {
         // 5 planes for the glossy surface, 3 for the diffuse one; an RGB f32 triple or an RGBE
         // word per texel.
         let planes = if s.material.specular.is_some() { 5 } else { 3 };
-        let texel = if s.gi.shading_storage == hfgi::scene::model::ShadingFormat::Rgbe { 4 } else { 12 };
+        let texel = if s.gi.shading_format() == hfgi::scene::model::ShadingFormat::Rgbe { 4 } else { 12 };
         assert_eq!(recorded.read_layers_bytes(), planes * 24 * 24 * texel);
         let mut down =
             StagingRing::new(&ctx, "test.readback", recorded.read_layers_bytes(), RingKind::Readback).unwrap();

@@ -288,6 +288,10 @@ fn estimate_512_by_subsample() {
         let r = memory::renderer(&scene).unwrap();
         let v = memory::view(&scene, &ViewOptions::default()).unwrap();
         assert!(r.total() > 0 && v.total() > 0);
+        // The shading planes (total, direct, indirect): `gi.shading_storage = "auto"` keeps an f32
+        // triple per texel at full rate and packs one RGBE word sub-sampled (docs/performance.md §37).
+        let out = r.buffers.iter().find(|(b, _)| b == "hfgi.shade.output").unwrap().1;
+        assert_eq!(out, 3 * 512 * 512 * if sub == 1 { 12 } else { 4 }, "subsample {sub}");
         // The default preset stores V, U and the radiance stack as halves (docs/performance.md §14).
         let mut f16 = vec!["heightfield.size=512", "gi.quality=\"default\"", "gi.bounces=1", s.as_str()];
         f16.push("gi.storage=\"f16\"");
@@ -331,6 +335,10 @@ fn estimate_512_by_subsample() {
             let stack = 23 - 4 * sub.ilog2() as u64;
             let plane = |i: u64| (n >> (i / 4)).pow(2);
             assert_eq!(get("hfgi.radiance.stack"), 3 * 2 * (0..stack).map(plane).sum::<u64>(), "subsample {sub}");
+            if sub == 2 {
+                // Table 1 of the paper: 20 MB at 2× (issue 12).
+                assert!(r.total() <= 20_000_000, "{} B", r.total());
+            }
         }
         assert!(r.total() < memory::renderer(&scene_of("", &f32_)).unwrap().total());
         let largest = r.largest().unwrap();

@@ -442,10 +442,40 @@ fn unknown_keys_are_named() {
     }
 }
 
+/// `gi.shading_storage` (docs/scene-format.md): `auto` in every preset, f32 planes with full-rate
+/// GI and RGBE when it is sub-sampled (`draft` is, at 2×); `f32` and `rgbe` hold at any
+/// sub-sampling; `hfgi plan`'s knob line prints the resolved format.
+#[test]
+fn shading_storage_auto_follows_the_sub_sampling() {
+    use hfgi::scene::model::{ShadingFormat as F, ShadingStorage as S};
+    for q in ["draft", "default", "paper", "high", "ultra"] {
+        let s = parse_with("", &[format!("gi.quality=\"{q}\"").as_str()]).unwrap();
+        assert_eq!(s.gi.shading_storage, S::Auto, "{q}");
+        let want = if s.gi.subsample > 1 { F::Rgbe } else { F::F32 };
+        assert_eq!(s.gi.shading_format(), want, "{q}, subsample {}", s.gi.subsample);
+    }
+    let cases = [
+        ("auto", 1, F::F32),
+        ("auto", 2, F::Rgbe),
+        ("auto", 4, F::Rgbe),
+        ("f32", 1, F::F32),
+        ("f32", 4, F::F32),
+        ("rgbe", 1, F::Rgbe),
+        ("rgbe", 2, F::Rgbe),
+    ];
+    for (storage, sub, want) in cases {
+        let (st, su) = (format!("gi.shading_storage=\"{storage}\""), format!("gi.subsample={sub}"));
+        let s = parse_with("", &[st.as_str(), su.as_str()]).unwrap();
+        assert_eq!(s.gi.shading_format(), want, "{storage}, subsample {sub}");
+        assert!(s.gi.describe().contains(&format!(" shading_storage={want} ")), "{}", s.gi.describe());
+    }
+}
+
 #[test]
 fn out_of_range_values_name_key_and_value() {
-    let cases: [(&str, &str, &[&str]); 8] = [
+    let cases: [(&str, &str, &[&str]); 9] = [
         ("[gi]\nazimuths = 2\n", "gi.azimuths", &["2", "4..=256"]),
+        ("[gi]\nshading_storage = \"f16\"\n", "gi.shading_storage", &["f16", "`auto`, `f32` or `rgbe`"]),
         ("[gi]\nsubsample = 3\n", "gi.subsample", &["3", "1, 2 or 4"]),
         ("[gi]\nsh_order = 9\n", "gi.sh_order", &["9", "2..=8"]),
         ("[material]\nalbedo = [2, 0, 0]\n", "material.albedo", &["[2, 0, 0]", "[0, 1]"]),

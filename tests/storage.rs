@@ -23,14 +23,14 @@ use hfgi::frame::truth::render_truth_gpu;
 use hfgi::frame::ShadingFormat;
 use hfgi::math::rgbe;
 use hfgi::reference::truth::TruthSettings;
-use hfgi::scene::model::{Scene, Storage};
+use hfgi::scene::model::{Scene, ShadingStorage, Storage};
 
 /// `s` with `storage` and f32 shading planes (RGBE planes are compared with f32 planes on their
 /// own, below).
 fn with_storage(s: &Scene, storage: Storage) -> Scene {
     let mut s = s.clone();
     s.gi.storage = storage;
-    s.gi.shading_storage = ShadingFormat::F32;
+    s.gi.shading_storage = ShadingStorage::F32;
     s
 }
 
@@ -146,7 +146,7 @@ fn rgbe_shading_planes_are_the_hosts_words() {
             }];
         }
         let mut s = with_storage(&s, Storage::F16);
-        s.gi.shading_storage = ShadingFormat::Rgbe;
+        s.gi.shading_storage = ShadingStorage::Rgbe;
         let words = common::render_with(&ctx, &s, |ctx, r| {
             assert_eq!(r.shading_format(), ShadingFormat::Rgbe);
             let b = r.shading_buffer();
@@ -189,7 +189,7 @@ fn rgbe_against_the_reference(file: &str, size: &str, extra: &[&str]) {
     let s = load(file, size, extra);
     let f32_planes = with_storage(&s, Storage::F16);
     let mut rgbe = f32_planes.clone();
-    rgbe.gi.shading_storage = ShadingFormat::Rgbe;
+    rgbe.gi.shading_storage = ShadingStorage::Rgbe;
     let what = format!("{file} {size} {extra:?}, f32 → RGBE planes");
     for (layer, e32, ergbe, d) in errors_against_the_reference(&what, &s, &f32_planes, &rgbe) {
         // Lower is allowed: the rounding moves the error either way, by up to the rounding's
@@ -225,7 +225,7 @@ fn rgbe_planes_keep_physical_units() {
     let ctx = gpu();
     let mut s = physical_units_scene();
     let a = render_layers(&ctx, &s);
-    s.gi.shading_storage = ShadingFormat::Rgbe;
+    s.gi.shading_storage = ShadingStorage::Rgbe;
     let b = render_layers(&ctx, &s);
     for (layer, x, y) in layer_pairs(&a, &b) {
         assert!(y.iter().flatten().all(|v| v.is_finite()), "RGBE {layer} is not finite");
@@ -293,11 +293,11 @@ fn f16_is_pre_exposed_so_physical_units_keep_their_precision() {
 /// RGBE planes give the same exactness: the scale moves their exponents only.
 #[test]
 fn f16_pre_exposure_follows_the_live_lights_exactly() {
-    follows_the_live_lights_exactly(ShadingFormat::F32);
-    follows_the_live_lights_exactly(ShadingFormat::Rgbe);
+    follows_the_live_lights_exactly(ShadingStorage::F32);
+    follows_the_live_lights_exactly(ShadingStorage::Rgbe);
 }
 
-fn follows_the_live_lights_exactly(planes: ShadingFormat) {
+fn follows_the_live_lights_exactly(planes: ShadingStorage) {
     let ctx = gpu();
     let mut s = scene(rough_field(32, 24, 4));
     s.gi.azimuths = 8;

@@ -31,35 +31,47 @@ struct Inputs {
 
 impl Inputs {
     fn new(ctx: &Context, w: usize, h: usize, f: impl Fn(usize, usize) -> (f32, [f32; 3])) -> Self {
-        let (heights, colours): (Vec<f32>, Vec<[f32; 3]>) = (0..w * h).map(|k| f(k % w, k / w)).unzip();
-        Self::from_data(ctx, w, h, heights, colours)
+        Self::new_in(ctx, w, h, ShadingFormat::F32, f)
     }
 
-    fn from_data(ctx: &Context, w: usize, h: usize, heights: Vec<f32>, colours: Vec<[f32; 3]>) -> Self {
+    /// As [`Inputs::new`], with the shading planes in `format`.
+    fn new_in(
+        ctx: &Context,
+        w: usize,
+        h: usize,
+        format: ShadingFormat,
+        f: impl Fn(usize, usize) -> (f32, [f32; 3]),
+    ) -> Self {
+        let (heights, colours): (Vec<f32>, Vec<[f32; 3]>) = (0..w * h).map(|k| f(k % w, k / w)).unzip();
+        Self::from_data(ctx, w, h, heights, colours, format)
+    }
+
+    /// The planes in `format`: plane 0 (total) holds `colours`, followed by a garbage plane that
+    /// must not be read (negative in f32; RGBE holds no negatives, so a huge magenta there). The
+    /// colours kept are what `format` holds of them, so the reference sees exactly the texels
+    /// the vertex shader must decode.
+    fn from_data(
+        ctx: &Context,
+        w: usize,
+        h: usize,
+        heights: Vec<f32>,
+        colours: Vec<[f32; 3]>,
+        format: ShadingFormat,
+    ) -> Self {
         let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let hb = Buffer::new(ctx, "test.heights", (w * h * 4) as u64, usage, MemoryLocation::GpuOnly).unwrap();
         memory::upload_f32(ctx, &hb, 0, &heights).unwrap();
-        // Plane 0 (total, RGB f32 per texel) followed by a garbage plane that must not be read.
+        let garbage = match format {
+            ShadingFormat::F32 => [-7.0f32; 3],
+            ShadingFormat::Rgbe => [9000.0, 0.0, 9000.0],
+        };
         let mut planes: Vec<[f32; 3]> = colours.clone();
-        planes.extend(std::iter::repeat([-7.0f32, -7.0, -7.0]).take(w * h));
-        let sb = Buffer::new(ctx, "test.shading", (planes.len() * 12) as u64, usage, MemoryLocation::GpuOnly).unwrap();
-        memory::upload(ctx, &sb, 0, bytemuck::cast_slice(&planes)).unwrap();
-        Self { w, h, heights, colours, hb, sb, format: ShadingFormat::F32 }
-    }
-
-    /// The same field with its shading planes in `format`; the colours become what `format`
-    /// holds of them, so the reference sees exactly the texels the vertex shader must decode.
-    fn in_format(mut self, ctx: &Context, format: ShadingFormat) -> Self {
-        let mut planes = self.colours.clone();
-        planes.extend(std::iter::repeat([9000.0f32, 0.0, 9000.0]).take(self.w * self.h));
+        planes.extend(std::iter::repeat(garbage).take(w * h));
         let bytes = format.encode(&planes);
-        let usage = raw::BufferUsageFlags::STORAGE_BUFFER | raw::BufferUsageFlags::TRANSFER_DST;
         let sb = Buffer::new(ctx, "test.shading", bytes.len() as u64, usage, MemoryLocation::GpuOnly).unwrap();
         memory::upload(ctx, &sb, 0, &bytes).unwrap();
-        std::mem::replace(&mut self.sb, sb).destroy(ctx);
-        self.colours = format.decode(&format.encode(&self.colours));
-        self.format = format;
-        self
+        let colours = format.decode(&format.encode(&colours));
+        Self { w, h, heights, colours, hb, sb, format }
     }
 
     fn range(&self) -> (f32, f32) {
@@ -333,13 +345,12 @@ fn matches_the_cpu_ray_caster_with_one_sample() {
 #[test]
 fn packed_shading_planes_are_decoded_as_the_host_decodes_them() {
     let ctx = gpu();
-    let inp = Inputs::new(&ctx, 64, 48, |i, j| {
+    let inp = Inputs::new_in(&ctx, 64, 48, ShadingFormat::Rgbe, |i, j| {
         let (x, y) = (i as f32, j as f32);
         let z = 6.0 * (-((y - 20.0).powi(2)) / 30.0).exp() + 0.05 * x;
         let scale = 2f32.powf(8.0 * x / 64.0 - 4.0);
         (z, [scale * (0.3 + y / 48.0), scale * 0.71, scale * (0.9 - 0.4 * y / 48.0)])
-    })
-    .in_format(&ctx, ShadingFormat::Rgbe);
+    });
     let oblique = camera([-4.0, -12.0, 16.0], [32.0, 26.0, 2.0], 50.0, 96, 64);
     check_against_reference(&ctx, &inp, &oblique, "RGBE shading planes");
     inp.destroy(&ctx);
@@ -546,7 +557,7 @@ fn renderer_then_view_in_one_command_buffer() {
     renderer.destroy(&ctx);
     assert!(img.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
     // The same mesh and colours on the CPU: the pass reads the renderer's buffers correctly.
-    let inp = Inputs::from_data(&ctx, 40, 32, scene.field.data().to_vec(), layers.total.clone());
+    let inp = Inputs::from_data(&ctx, 40, 32, scene.field.data().to_vec(), layers.total.clone(), ShadingFormat::F32);
     let r = reference(&inp, &scene.camera);
     let Stats { compared: n, covered, worst, .. } = compare(&img, &r, &scene.camera);
     eprintln!("renderer's shading texture: {n} of {covered} covered pixels compared, max relative error {worst:.2e}");

@@ -12,8 +12,8 @@ mod gi;
 pub use content::{Albedo, Camera, Environment, KeyLight, LocalLight, Material, SphereBlocker};
 pub use enums::{
     BlockerExp, BlockerKeyLights, BlockerLogCap, BlockerShading, DiffuseLobe, ElevationBasis, GlossyPyramid, Horizon,
-    Interpolation, Level0, OmegaMin, PyramidMode, Quality, ScanReach, ShadingFormat, Storage, VisibilityMethod,
-    LOG_BRDF_EPSILON,
+    Interpolation, Level0, OmegaMin, PyramidMode, Quality, ScanReach, ShadingFormat, ShadingStorage, Storage,
+    VisibilityMethod, LOG_BRDF_EPSILON,
 };
 pub use gi::GiSettings;
 

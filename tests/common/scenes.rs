@@ -49,7 +49,7 @@ pub fn scene(field: HeightField) -> Scene {
         // in tests/storage.rs.
         gi: GiSettings {
             storage: hfgi::scene::model::Storage::F32,
-            shading_storage: hfgi::scene::model::ShadingFormat::F32,
+            shading_storage: hfgi::scene::model::ShadingStorage::F32,
             ..GiSettings::default()
         },
         camera,

@@ -7,9 +7,10 @@ use crate::scene::model::Scene;
 pub use crate::scene::model::ShadingFormat;
 
 impl ShadingFormat {
-    /// The format `scene`'s shading buffer is created with.
+    /// The format `scene`'s shading buffer is created with (`gi.shading_storage` resolved:
+    /// [`crate::scene::model::GiSettings::shading_format`]).
     pub fn of(scene: &Scene) -> Self {
-        scene.gi.shading_storage
+        scene.gi.shading_format()
     }
 
     /// Bytes per texel of a plane.

@@ -236,9 +236,9 @@ settings_enum!(
 );
 
 settings_enum!(
-    /// The texel format of the shading planes, the renderer's output (`gi.shading_storage`;
-    /// docs/integration.md, "Shading buffer"; docs/performance.md §36). The EXR export is f32
-    /// either way.
+    /// The texel format of the shading planes, the renderer's output (docs/integration.md,
+    /// "Shading buffer"; docs/performance.md §36): what [`ShadingStorage`] resolves to. The EXR
+    /// export is f32 either way.
     ShadingFormat, "gi.shading_storage", "`f32` or `rgbe`", {
         /// One shared-exponent word per texel, 4 bytes (`crate::math::rgbe`, Ward's RGBE:
         /// 8-bit mantissas, an 8-bit exponent): a third of f32's memory, 8 significant bits of
@@ -246,10 +246,36 @@ settings_enum!(
         /// by 0.009–0.02 points on the hard fields), f32's range (no pre-exposure), negative
         /// channels clamped to 0, a non-finite texel read as NaN.
         Rgbe = "rgbe",
-        /// An RGB `f32` triple per texel, 12 bytes. The default.
+        /// An RGB `f32` triple per texel, 12 bytes.
         F32 = "f32",
     }
 );
+
+settings_enum!(
+    /// How the shading planes are stored (`gi.shading_storage`; docs/performance.md §36–§37):
+    /// a [`ShadingFormat`], or chosen from the sub-sampling.
+    ShadingStorage, "gi.shading_storage", "`auto`, `f32` or `rgbe`", {
+        /// [`ShadingFormat::F32`] with full-rate GI (`gi.subsample = 1`), [`ShadingFormat::Rgbe`]
+        /// when it is sub-sampled: there the sub-sampling's interpolation adds 100–1000× the
+        /// error RGBE's rounding does (docs/performance.md §37). Every preset's default.
+        Auto = "auto",
+        /// Always [`ShadingFormat::F32`].
+        F32 = "f32",
+        /// Always [`ShadingFormat::Rgbe`].
+        Rgbe = "rgbe",
+    }
+);
+
+impl ShadingStorage {
+    /// The planes' format with GI sub-sampled by `subsample` (`gi.subsample`).
+    pub fn resolve(self, subsample: u32) -> ShadingFormat {
+        match self {
+            Self::Auto if subsample > 1 => ShadingFormat::Rgbe,
+            Self::Auto | Self::F32 => ShadingFormat::F32,
+            Self::Rgbe => ShadingFormat::Rgbe,
+        }
+    }
+}
 
 impl Storage {
     /// Values one receiver's vector of `values` numbers occupies: rounded up to even with f16,

@@ -2,7 +2,8 @@
 
 use super::{
     BlockerExp, BlockerKeyLights, BlockerLogCap, BlockerShading, DiffuseLobe, ElevationBasis, GlossyPyramid, Horizon,
-    Interpolation, Level0, OmegaMin, PyramidMode, Quality, ScanReach, ShadingFormat, Storage, VisibilityMethod,
+    Interpolation, Level0, OmegaMin, PyramidMode, Quality, ScanReach, ShadingFormat, ShadingStorage, Storage,
+    VisibilityMethod,
 };
 use crate::error::{Error, Result};
 
@@ -86,8 +87,9 @@ pub struct GiSettings {
     /// Storage of the visibility and IR vectors and the radiance stack (f16 by default, at
     /// half the memory of f32).
     pub storage: Storage,
-    /// The shading planes' texel format (f32 by default; RGBE at a third of the memory).
-    pub shading_storage: ShadingFormat,
+    /// The shading planes' storage: f32, RGBE (a third of the memory), or by default `auto`
+    /// (f32 at full rate, RGBE sub-sampled; [`GiSettings::shading_format`]).
+    pub shading_storage: ShadingStorage,
     /// With the sweep: texels along each receiver's own ray marched exactly (the near field,
     /// docs/direct.md §7), 0..=64; the sweep lines give the horizon beyond.
     pub sweep_near: u32,
@@ -170,7 +172,7 @@ impl GiSettings {
             visibility: VisibilityMethod::Ladder,
             diffuse_lobe: DiffuseLobe::Sh,
             storage: Storage::F16,
-            shading_storage: ShadingFormat::F32,
+            shading_storage: ShadingStorage::Auto,
             sweep_near: 16,
             blocker_epsilon: 0.2,
             blocker_ratio: true,
@@ -205,6 +207,11 @@ impl GiSettings {
         }
     }
 
+    /// The shading planes' texel format: `gi.shading_storage` resolved against `gi.subsample`.
+    pub fn shading_format(&self) -> ShadingFormat {
+        self.shading_storage.resolve(self.subsample)
+    }
+
     /// Every accuracy knob, resolved, on one line (`hfgi plan` and `hfgi bench` print it):
     /// `quality=… sh_order=… azimuths=… level_step=… …`.
     pub fn describe(&self) -> String {
@@ -235,7 +242,7 @@ impl GiSettings {
             self.elevation_basis,
             self.visibility,
             self.storage,
-            self.shading_storage,
+            self.shading_format(),
             self.sweep_near,
             self.key_light_azimuths,
             self.bounces,
