@@ -256,7 +256,7 @@ settings_enum!(
     /// a [`ShadingFormat`], or chosen from the sub-sampling.
     ShadingStorage, "gi.shading_storage", "`auto`, `f32` or `rgbe`", {
         /// [`ShadingFormat::F32`] with full-rate GI (`gi.subsample = 1`), [`ShadingFormat::Rgbe`]
-        /// when it is sub-sampled: there the sub-sampling's interpolation adds 100–1000× the
+        /// when it is sub-sampled: there the sub-sampling's interpolation adds 190–5400× the
         /// error RGBE's rounding does (docs/performance.md §37). Every preset's default.
         Auto = "auto",
         /// Always [`ShadingFormat::F32`].
