@@ -1,9 +1,10 @@
 //! The shared-exponent RGB word of the shading planes (Ward's RGBE, as in Radiance `.hdr` files,
 //! with the exponent rule of the Vulkan specification's shared-exponent conversion and rounding
 //! to nearest, ties to even): three 8-bit mantissas `r`, `g`, `b` (bits 0–7, 8–15, 16–23) and
-//! one 8-bit exponent `e` (bits 24–31), the value of a channel `m · 2^(e − 127 − 8)`. The shading planes use it with `gi.shading_storage =
-//! "rgbe"` (docs/integration.md, "Shading buffer"); `glsl/inc/hfgi_plane.glsl` packs with the same
-//! rounding, so that this module reproduces the GPU's words bit for bit.
+//! one 8-bit exponent `e` (bits 24–31), the value of a channel `m · 2^(e − 127 − 8)`. The
+//! shading planes use it with `gi.shading_storage = "rgbe"`, and with the default `"auto"` when GI
+//! is sub-sampled (docs/integration.md, "Shading buffer"); `glsl/inc/hfgi_plane.glsl` packs with
+//! the same rounding, so that this module reproduces the GPU's words bit for bit.
 //!
 //! Precision: the largest channel keeps 8 significant bits (a rounding error of at most 2⁻⁹ of
 //! its value … 2⁻⁸), a smaller one the same absolute step. Range: the whole of f32's (no

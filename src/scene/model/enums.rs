@@ -235,21 +235,30 @@ settings_enum!(
     }
 );
 
-settings_enum!(
-    /// The texel format of the shading planes, the renderer's output (docs/integration.md,
-    /// "Shading buffer"; docs/performance.md §36): what [`ShadingStorage`] resolves to. The EXR
-    /// export is f32 either way.
-    ShadingFormat, "gi.shading_storage", "`f32` or `rgbe`", {
-        /// One shared-exponent word per texel, 4 bytes (`crate::math::rgbe`, Ward's RGBE:
-        /// 8-bit mantissas, an 8-bit exponent): a third of f32's memory, 8 significant bits of
-        /// the largest channel (0.15–0.3% relative L2 per layer, which raises the total's error
-        /// by 0.009–0.02 points on the hard fields), f32's range (no pre-exposure), negative
-        /// channels clamped to 0, a non-finite texel read as NaN.
-        Rgbe = "rgbe",
-        /// An RGB `f32` triple per texel, 12 bytes.
-        F32 = "f32",
+/// The texel format of the shading planes, the renderer's output (docs/integration.md,
+/// "Shading buffer"; docs/performance.md §36): what [`ShadingStorage`] resolves to, so not itself
+/// a setting (no parser); printed as `gi.shading_storage`'s value. The EXR export is f32 either
+/// way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadingFormat {
+    /// One shared-exponent word per texel, 4 bytes (`crate::math::rgbe`, Ward's RGBE:
+    /// 8-bit mantissas, an 8-bit exponent): a third of f32's memory, 8 significant bits of
+    /// the largest channel (0.15–0.3% relative L2 per layer, which raises the total's error
+    /// by 0.009–0.02 points on the hard fields), f32's range (no pre-exposure), negative
+    /// channels clamped to 0, a non-finite texel read as NaN.
+    Rgbe,
+    /// An RGB `f32` triple per texel, 12 bytes.
+    F32,
+}
+
+impl std::fmt::Display for ShadingFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Rgbe => "rgbe",
+            Self::F32 => "f32",
+        })
     }
-);
+}
 
 settings_enum!(
     /// How the shading planes are stored (`gi.shading_storage`; docs/performance.md §36–§37):
