@@ -301,4 +301,14 @@ fn bench_timing_runs_the_grid_without_references() {
     }
     let md = std::fs::read_to_string(dir.path().join("timing.md")).unwrap();
     assert!(md.contains("median of 1 frames after 1 warm-up") && md.contains("Device:"), "{md}");
+    // The default planes follow each row's sub-sampling (`auto`: f32 at 1×, RGBE at 2× and 4×,
+    // written out here rather than asked of the code), so the header, shared by every row,
+    // does not name one format.
+    assert!(!md.lines().next().unwrap().contains("shading_storage="), "{md}");
+    for sub in [4, 2, 1] {
+        let planes = if sub == 1 { "f32" } else { "rgbe" };
+        let rows: Vec<&str> = md.lines().filter(|l| l.starts_with(&format!("| 16² | {sub}× |"))).collect();
+        assert_eq!(rows.len(), 3, "{md}");
+        assert!(rows.iter().all(|l| l.contains(&format!("| {planes} |"))), "{sub}×: {md}");
+    }
 }

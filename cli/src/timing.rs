@@ -38,6 +38,9 @@ struct Timed {
     stages: Vec<(String, f64)>,
     total_ms: f64,
     memory: u64,
+    /// The shading planes' format this row resolved to (`gi.shading_storage = "auto"` follows
+    /// the row's sub-sampling).
+    planes: String,
 }
 
 /// Runs the timing grid for `a` (scene: the first of `--scenes`; sizes: `--size` or the paper's).
@@ -73,7 +76,7 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
         let (stages, memory, _) =
             measure(&ctx, &scene, a.frames).with_context(|| format!("timing {n}² sub {sub} b {b}"))?;
         let total_ms = stages.iter().map(|(_, ms)| ms).sum();
-        done.push(Timed { cfg, stages, total_ms, memory });
+        done.push(Timed { cfg, stages, total_ms, memory, planes: scene.gi.shading_format().to_string() });
     }
     bar.finish_and_clear();
     let header = format!(
@@ -96,11 +99,12 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
     Ok(())
 }
 
-/// The resolved knobs without `subsample=` and `bounces=`, which each row sets.
+/// The resolved knobs without `subsample=` and `bounces=`, which each row sets, and
+/// `shading_storage=`, which each row resolves by its sub-sampling (the table's planes column).
 fn per_row_knobs_removed(knobs: &str) -> String {
     knobs
         .split(' ')
-        .filter(|k| !k.starts_with("subsample=") && !k.starts_with("bounces="))
+        .filter(|k| !k.starts_with("subsample=") && !k.starts_with("bounces=") && !k.starts_with("shading_storage="))
         .collect::<Vec<_>>()
         .join(" ")
 }
@@ -123,7 +127,7 @@ fn to_csv(rows: &[Timed], device: &str, driver: &str) -> String {
 }
 
 fn to_md(header: &str, rows: &[Timed], skipped: &[Config]) -> String {
-    let mut s = format!("{header}\n| field | sub-sampling | bounces | frame (ms) | fps | GPU memory (MiB) | largest stages (ms) |\n|---|---|---|---|---|---|---|\n");
+    let mut s = format!("{header}\n| field | sub-sampling | bounces | frame (ms) | fps | GPU memory (MiB) | shading planes | largest stages (ms) |\n|---|---|---|---|---|---|---|---|\n");
     for r in rows {
         let (n, sub, b) = r.cfg;
         let mut top = r.stages.clone();
@@ -131,10 +135,11 @@ fn to_md(header: &str, rows: &[Timed], skipped: &[Config]) -> String {
         let top: Vec<String> = top.iter().take(3).map(|(k, ms)| format!("{k} {ms:.1}")).collect();
         let _ = writeln!(
             s,
-            "| {n}² | {sub}× | {b} | {:.1} | {:.2} | {:.1} | {} |",
+            "| {n}² | {sub}× | {b} | {:.1} | {:.2} | {:.1} | {} | {} |",
             r.total_ms,
             1000.0 / r.total_ms,
             r.memory as f64 / 1048576.0,
+            r.planes,
             top.join(", ")
         );
     }
