@@ -125,9 +125,9 @@ fn f16_renders_every_mode_like_f32() {
 /// RGBE shading planes (`gi.shading_storage = "rgbe"`) are words as the host packs them
 /// (`math::rgbe::pack`: the Vulkan rule's exponent, ties to even): every word is the packing of
 /// its own value (shared exponent from the largest channel, that channel's mantissa normalised
-/// to 128…255), on a
-/// glossy surface with several bounces and a local light, sub-sampled and not (the indirect
-/// shade's, the local lights' and the total's read-modify-writes), and every value is finite.
+/// to 128…255), on a glossy surface with several bounces and a local light, sub-sampled and not
+/// (the indirect shade's, the local lights' and the total's read-modify-writes), and every value
+/// is finite.
 #[test]
 fn rgbe_shading_planes_are_the_hosts_words() {
     let ctx = gpu();

@@ -11,6 +11,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
+use hfgi::scene::model::ShadingFormat;
 
 use super::bench::{measure, BenchArgs};
 use super::{context, load_scene_or_default};
@@ -40,7 +41,7 @@ struct Timed {
     memory: u64,
     /// The shading planes' format this row resolved to (`gi.shading_storage = "auto"` follows
     /// the row's sub-sampling).
-    planes: String,
+    planes: ShadingFormat,
 }
 
 /// Runs the timing grid for `a` (scene: the first of `--scenes`; sizes: `--size` or the paper's).
@@ -76,7 +77,7 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
         let (stages, memory, _) =
             measure(&ctx, &scene, a.frames).with_context(|| format!("timing {n}² sub {sub} b {b}"))?;
         let total_ms = stages.iter().map(|(_, ms)| ms).sum();
-        done.push(Timed { cfg, stages, total_ms, memory, planes: scene.gi.shading_format().to_string() });
+        done.push(Timed { cfg, stages, total_ms, memory, planes: scene.gi.shading_format() });
     }
     bar.finish_and_clear();
     let header = format!(
@@ -99,14 +100,13 @@ pub fn run(a: &BenchArgs, budget_s: u64) -> Result<()> {
     Ok(())
 }
 
-/// The resolved knobs without `subsample=` and `bounces=`, which each row sets, and
-/// `shading_storage=`, which each row resolves by its sub-sampling (the table's planes column).
+/// The knobs each row sets (`subsample`, `bounces`) or resolves by its sub-sampling
+/// (`shading_storage`: the table's planes column), left out of the header.
+const PER_ROW_KNOBS: [&str; 3] = ["subsample=", "bounces=", "shading_storage="];
+
+/// The resolved knobs without [`PER_ROW_KNOBS`].
 fn per_row_knobs_removed(knobs: &str) -> String {
-    knobs
-        .split(' ')
-        .filter(|k| !k.starts_with("subsample=") && !k.starts_with("bounces=") && !k.starts_with("shading_storage="))
-        .collect::<Vec<_>>()
-        .join(" ")
+    knobs.split(' ').filter(|k| !PER_ROW_KNOBS.iter().any(|p| k.starts_with(p))).collect::<Vec<_>>().join(" ")
 }
 
 fn to_csv(rows: &[Timed], device: &str, driver: &str) -> String {

@@ -251,12 +251,10 @@ pub enum ShadingFormat {
     F32,
 }
 
+/// Printed as the `gi.shading_storage` value that forces it (one spelling, the setting's).
 impl std::fmt::Display for ShadingFormat {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Self::Rgbe => "rgbe",
-            Self::F32 => "f32",
-        })
+        ShadingStorage::from(*self).fmt(f)
     }
 }
 
@@ -274,6 +272,16 @@ settings_enum!(
         Rgbe = "rgbe",
     }
 );
+
+/// The setting that forces a format.
+impl From<ShadingFormat> for ShadingStorage {
+    fn from(format: ShadingFormat) -> Self {
+        match format {
+            ShadingFormat::F32 => Self::F32,
+            ShadingFormat::Rgbe => Self::Rgbe,
+        }
+    }
+}
 
 impl ShadingStorage {
     /// The planes' format with GI sub-sampled by `subsample` (`gi.subsample`).
